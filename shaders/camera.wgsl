@@ -1,0 +1,27 @@
+// The camera as a view frustum. It sits at the origin (positions are
+// camera-relative); `right` and `up` are pre-scaled by the half extents of the
+// image plane at distance 1 (perspective) or of the window (orthographic).
+
+// Mirrored by render::layout::Camera.
+struct Camera {
+    right: vec3<f32>,
+    width: u32,
+    up: vec3<f32>,
+    height: u32,
+    forward: vec3<f32>,
+    orthographic: u32,
+}
+
+// The ray through the centre of pixel `px`; row 0 is the top of the image.
+fn primary_ray(cam: Camera, px: vec2<u32>) -> Ray {
+    let size = vec2<f32>(f32(cam.width), f32(cam.height));
+    let ndc = vec2<f32>(
+        (f32(px.x) + 0.5) / size.x * 2.0 - 1.0,
+        1.0 - (f32(px.y) + 0.5) / size.y * 2.0,
+    );
+    let offset = ndc.x * cam.right + ndc.y * cam.up;
+    if cam.orthographic != 0u {
+        return Ray(offset, cam.forward);
+    }
+    return Ray(vec3<f32>(0.0), normalize(cam.forward + offset));
+}

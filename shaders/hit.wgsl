@@ -1,0 +1,104 @@
+// The nearest intersection along a ray, and the normal the ray carries back.
+
+const KIND_PLANE: u32 = 0u;
+const KIND_SPHERE: u32 = 1u;
+const KIND_TRIANGLE: u32 = 2u;
+
+struct Hit {
+    found: bool,
+    t: f32,
+    // Which primitive: kind and index into that kind's buffer.
+    kind: u32,
+    index: u32,
+    // Barycentric coordinates of triangle hits.
+    u: f32,
+    v: f32,
+    // Filled in by finish_hit for the nearest hit only.
+    position: vec3<f32>,
+    geometric_normal: vec3<f32>,
+    shading_normal: vec3<f32>,
+    shader: u32,
+}
+
+// Nearest hit over every primitive kind the scene has (brute force).
+fn closest_hit(ray: Ray) -> Hit {
+    var hit: Hit;
+    hit.found = false;
+    hit.t = FAR;
+    if HAS_PLANES {
+        for (var i = 0u; i < globals.num_planes; i++) {
+            let t = intersect_plane(planes[i], ray);
+            if t > 0.0 && t < hit.t {
+                hit.found = true;
+                hit.t = t;
+                hit.kind = KIND_PLANE;
+                hit.index = i;
+            }
+        }
+    }
+    if HAS_SPHERES {
+        for (var i = 0u; i < globals.num_spheres; i++) {
+            let t = intersect_sphere(spheres[i], ray);
+            if t > 0.0 && t < hit.t {
+                hit.found = true;
+                hit.t = t;
+                hit.kind = KIND_SPHERE;
+                hit.index = i;
+            }
+        }
+    }
+    if HAS_TRIANGLES {
+        for (var i = 0u; i < globals.num_triangles; i++) {
+            let h = intersect_triangle(triangles[i], ray, hit.t);
+            if h.x > 0.0 {
+                hit.found = true;
+                hit.t = h.x;
+                hit.kind = KIND_TRIANGLE;
+                hit.index = i;
+                hit.u = h.y;
+                hit.v = h.z;
+            }
+        }
+    }
+    if hit.found {
+        finish_hit(ray, &hit);
+    }
+    return hit;
+}
+
+// Position, normals and shader of the nearest hit. Both normals are turned to
+// face the incoming ray: surfaces are two-sided.
+fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
+    let p = ray_at(ray, (*hit).t);
+    var ng: vec3<f32>;
+    var ns: vec3<f32>;
+    switch (*hit).kind {
+        case KIND_PLANE: {
+            let plane = planes[(*hit).index];
+            ng = plane.normal;
+            ns = ng;
+            (*hit).shader = plane.shader;
+        }
+        case KIND_SPHERE: {
+            let sphere = spheres[(*hit).index];
+            ng = normalize(p - sphere.center);
+            ns = ng;
+            (*hit).shader = sphere.shader;
+        }
+        default: {
+            let tri = triangles[(*hit).index];
+            ng = normalize(cross(tri.e1, tri.e2));
+            ns = triangle_shading_normal(tri, ng, (*hit).u, (*hit).v);
+            (*hit).shader = tri.shader;
+        }
+    }
+    if dot(ng, ray.dir) > 0.0 {
+        ng = -ng;
+    }
+    if dot(ns, ray.dir) > 0.0 {
+        ns = -ns;
+    }
+    (*hit).position = p;
+    (*hit).geometric_normal = ng;
+    (*hit).shading_normal = ns;
+}

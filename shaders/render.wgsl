@@ -1,0 +1,85 @@
+// penumbra's compute kernel: one invocation per pixel.
+// The host concatenates the files of this tree (see src/render/compile.rs);
+// WGSL declarations are order-independent, so each concept file declares its
+// own data layout, binding and functions.
+//
+// All positions arrive camera-relative (the host subtracts the eye position in
+// f64 before rounding to f32), so the camera sits at the origin and precision
+// does not fall off far from the world origin.
+
+// Features of the scene; the host resolves these per scene with naga's
+// process_overrides, and lavapipe's compiler drops the code of every kind the
+// scene does not use.
+override HAS_PLANES: bool = true;
+override HAS_SPHERES: bool = true;
+override HAS_TRIANGLES: bool = true;
+override HAS_VERTEX_NORMALS: bool = true;
+override HAS_DIRECTIONAL: bool = true;
+override HAS_POINT: bool = true;
+override HAS_SPOT: bool = true;
+override HAS_PHONG: bool = true;
+override HAS_BLINN_PHONG: bool = true;
+override HAS_CHECKER: bool = true;
+
+// Mirrored by render::layout::Globals.
+struct Globals {
+    camera: Camera,
+    background: vec3<f32>,
+    num_planes: u32,
+    num_spheres: u32,
+    num_triangles: u32,
+    num_lights: u32,
+    num_shaders: u32,
+}
+
+// Mirrored by render::layout::PushConstants.
+struct PushConstants {
+    // Pixel offset of this dispatch (tiling), and flags.
+    origin: vec2<u32>,
+    flags: u32,
+    _pad: u32,
+}
+
+const FLAG_WARM_UP: u32 = 1u;
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+// Linear RGB; alpha is 1 where a primary ray hit something, else 0.
+@group(0) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
+// [0] primary rays, [1] shadow rays traced.
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 2>;
+var<immediate> push: PushConstants;
+
+var<workgroup> group_shadow_rays: atomic<u32>;
+var<workgroup> group_primary_rays: atomic<u32>;
+
+@compute @workgroup_size(8, 8, 1)
+fn render(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    // The warm-up dispatch makes the driver compile the kernel (lavapipe
+    // compiles at the first dispatch) without rendering anything.
+    if (push.flags & FLAG_WARM_UP) != 0u {
+        return;
+    }
+    let px = gid.xy + push.origin;
+    var shadow_rays = 0u;
+    var primary = 0u;
+    if px.x < globals.camera.width && px.y < globals.camera.height {
+        let ray = primary_ray(globals.camera, px);
+        let hit = closest_hit(ray);
+        var colour = globals.background;
+        var alpha = 0.0;
+        if hit.found {
+            colour = shade(ray, hit, &shadow_rays);
+            alpha = 1.0;
+        }
+        image[px.y * globals.camera.width + px.x] = vec4<f32>(colour, alpha);
+        primary = 1u;
+    }
+    // One global atomic per workgroup instead of one per pixel.
+    atomicAdd(&group_primary_rays, primary);
+    atomicAdd(&group_shadow_rays, shadow_rays);
+    workgroupBarrier();
+    if lane == 0u {
+        atomicAdd(&counters[0], atomicLoad(&group_primary_rays));
+        atomicAdd(&counters[1], atomicLoad(&group_shadow_rays));
+    }
+}

@@ -1,0 +1,75 @@
+// Hard shadows: one shadow ray per light, with an any-hit early exit.
+//
+// Self-intersection ("shadow acne") is avoided without an epsilon that thin
+// occluders could slip through:
+// * a plane or triangle cannot shadow itself, so the shadow ray skips the
+//   primitive it starts on;
+// * a sphere shadows a point on itself exactly when the ray heads into it, and
+//   then along the whole chord, so that case is decided analytically;
+// * against every other primitive (neighbouring mesh triangles) the origin is
+//   pushed off the surface by a few ULPs along the geometric normal, as in
+//   Wächter and Binder, "A Fast and Robust Method for Avoiding
+//   Self-Intersection" (Ray Tracing Gems, 2019). The offset scales with the
+//   coordinates' magnitude, so it holds far from the origin too.
+
+const OFFSET_ORIGIN: f32 = 1.0 / 32.0;
+const OFFSET_FLOAT_SCALE: f32 = 1.0 / 65536.0;
+const OFFSET_INT_SCALE: f32 = 256.0;
+
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let of_i = vec3<i32>(OFFSET_INT_SCALE * n);
+    let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
+    return select(p_i, p + OFFSET_FLOAT_SCALE * n, abs(p) < vec3<f32>(OFFSET_ORIGIN));
+}
+
+// Whether anything blocks the light sampled by `ls` from the hit point.
+fn occluded(hit: Hit, ls: LightSample) -> bool {
+    // Light below the geometric surface (possible with interpolated normals):
+    // the surface itself is in the way.
+    if dot(ls.to_light, hit.geometric_normal) <= 0.0 {
+        return true;
+    }
+    let ray = Ray(offset_ray_origin(hit.position, hit.geometric_normal), ls.to_light);
+    let t_max = ls.distance;
+    if HAS_PLANES {
+        for (var i = 0u; i < globals.num_planes; i++) {
+            if hit.kind == KIND_PLANE && hit.index == i {
+                continue;
+            }
+            let t = intersect_plane(planes[i], ray);
+            if t > 0.0 && t < t_max {
+                return true;
+            }
+        }
+    }
+    if HAS_SPHERES {
+        for (var i = 0u; i < globals.num_spheres; i++) {
+            let sphere = spheres[i];
+            if hit.kind == KIND_SPHERE && hit.index == i {
+                let to_centre = sphere.center - hit.position;
+                let into = dot(ls.to_light, to_centre);
+                if into > 0.0 && 2.0 * into < t_max {
+                    return true;
+                }
+                continue;
+            }
+            let roots = sphere_roots(sphere, ray);
+            // Either root inside (0, t_max) blocks; a ray starting inside a
+            // sphere is blocked by its far side.
+            if roots.x <= roots.y && ((roots.x > 0.0 && roots.x < t_max) || (roots.y > 0.0 && roots.y < t_max)) {
+                return true;
+            }
+        }
+    }
+    if HAS_TRIANGLES {
+        for (var i = 0u; i < globals.num_triangles; i++) {
+            if hit.kind == KIND_TRIANGLE && hit.index == i {
+                continue;
+            }
+            if intersect_triangle(triangles[i], ray, t_max).x > 0.0 {
+                return true;
+            }
+        }
+    }
+    return false;
+}

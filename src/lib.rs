@@ -1,0 +1,31 @@
+//! penumbra: a headless ray tracer whose rendering runs entirely in Vulkan
+//! compute shaders — on Mesa's CPU driver lavapipe by default, and on any
+//! Vulkan 1.1 GPU when there is one.
+//!
+//! The crate follows the seminar "Shaders, shading and shadows":
+//!
+//! * [`scene`] is the plain, validated scene model (camera, primitives, lights,
+//!   shading models), independent of Vulkan;
+//! * [`loaders`] build it from JSON scene files and glTF 2.0 files;
+//! * [`render`] turns it into GPU buffers and a specialised compute kernel
+//!   (WGSL from `shaders/`, compiled by naga) and runs it through
+//! * [`vulkan`], the only module that talks to Vulkan (`ash`);
+//! * [`output`] writes PNG (sRGB) and OpenEXR (linear) files atomically.
+//!
+//! ```no_run
+//! use penumbra::{loaders, render::{Renderer, RendererOptions}};
+//! let loaded = loaders::load_scene(std::path::Path::new("scenes/showcase.json"), &Default::default())?;
+//! let mut renderer = Renderer::new(&RendererOptions::default())?;
+//! let frame = renderer.render(&loaded.scene)?;
+//! penumbra::output::write_image(std::path::Path::new("showcase.png"), &frame.image)?;
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+
+pub mod error;
+pub mod loaders;
+pub mod output;
+pub mod render;
+pub mod scene;
+pub mod vulkan;
+
+pub use error::SceneError;

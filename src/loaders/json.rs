@@ -1,0 +1,485 @@
+//! The JSON scene format, documented field by field in `scenes/README.md`.
+//!
+//! Parsing is strict: unknown fields are errors, every field has one type,
+//! and every value is checked where it is read, so an error names the file and
+//! the JSON path of the field (`objects[2].radius`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use serde::Deserialize;
+
+use super::{LoadOptions, Loaded};
+use crate::scene::{
+    Camera, Checker, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, ShaderId,
+    Shape, Sphere, Triangle,
+};
+use crate::SceneError;
+
+type V3 = [f64; 3];
+type C3 = [f32; 3];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    camera: CameraFile,
+    #[serde(default)]
+    background: C3,
+    #[serde(default)]
+    shaders: BTreeMap<String, ShaderFile>,
+    #[serde(default)]
+    objects: Vec<ObjectFile>,
+    #[serde(default)]
+    lights: Vec<LightFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraFile {
+    position: V3,
+    look_at: Option<V3>,
+    up: Option<V3>,
+    yaw: Option<f64>,
+    pitch: Option<f64>,
+    roll: Option<f64>,
+    #[serde(default)]
+    projection: ProjectionKind,
+    fov: Option<f64>,
+    half_height: Option<f64>,
+    width: u32,
+    height: u32,
+}
+
+#[derive(Deserialize, Default, PartialEq, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum ProjectionKind {
+    #[default]
+    Perspective,
+    Orthographic,
+}
+
+#[derive(Deserialize, PartialEq, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum ShaderKind {
+    Phong,
+    BlinnPhong,
+    Checker,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShaderFile {
+    #[serde(rename = "type")]
+    kind: ShaderKind,
+    ambient: Option<C3>,
+    diffuse: Option<C3>,
+    specular: Option<C3>,
+    shininess: Option<f32>,
+    size: Option<f64>,
+    even: Option<String>,
+    odd: Option<String>,
+}
+
+#[derive(Deserialize, PartialEq, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum ObjectKind {
+    Plane,
+    Sphere,
+    Triangle,
+    Mesh,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectFile {
+    #[serde(rename = "type")]
+    kind: ObjectKind,
+    shader: Option<String>,
+    point: Option<V3>,
+    normal: Option<V3>,
+    center: Option<V3>,
+    radius: Option<f64>,
+    vertices: Option<[V3; 3]>,
+    file: Option<PathBuf>,
+    transform: Option<TransformFile>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct TransformFile {
+    #[serde(default)]
+    translate: V3,
+    /// Degrees about the world X, then Y, then Z axis.
+    #[serde(default)]
+    rotate: V3,
+    scale: Option<Scale>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Scale {
+    Uniform(f64),
+    PerAxis(V3),
+}
+
+#[derive(Deserialize, PartialEq, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum LightType {
+    Directional,
+    Point,
+    Spot,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightFile {
+    #[serde(rename = "type")]
+    kind: LightType,
+    position: Option<V3>,
+    direction: Option<V3>,
+    inner_angle: Option<f64>,
+    outer_angle: Option<f64>,
+    intensity: Option<f32>,
+    ambient: Option<C3>,
+    diffuse: Option<C3>,
+    specular: Option<C3>,
+}
+
+/// Checks that exactly the fields a kind needs are present: `fields` lists
+/// (name, present, needed-by-this-kind).
+fn fields_for(file: &Path, at: &str, kind: &str, fields: &[(&str, bool, bool)]) -> Result<(), SceneError> {
+    for &(name, present, needed) in fields {
+        if needed && !present {
+            return Err(SceneError::new(file, at, format!("missing field `{name}` (required for {kind})")));
+        }
+        if present && !needed {
+            return Err(SceneError::new(file, format!("{at}.{name}"), format!("not a field of {kind}")));
+        }
+    }
+    Ok(())
+}
+
+struct Reader<'a> {
+    file: &'a Path,
+}
+
+impl Reader<'_> {
+    fn err(&self, field: impl Into<String>, msg: impl Into<String>) -> SceneError {
+        SceneError::new(self.file, field, msg)
+    }
+
+    fn finite(&self, field: &str, v: V3) -> Result<DVec3, SceneError> {
+        let v = DVec3::from_array(v);
+        if !v.is_finite() {
+            return Err(self.err(field, format!("must be finite, got {v}")));
+        }
+        Ok(v)
+    }
+
+    fn direction(&self, field: &str, v: V3) -> Result<DVec3, SceneError> {
+        let v = self.finite(field, v)?;
+        let len = v.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(self.err(field, "must be a non-zero vector"));
+        }
+        Ok(v / len)
+    }
+
+    fn colour(&self, field: &str, c: C3) -> Result<Vec3, SceneError> {
+        let c = Vec3::from_array(c);
+        if !c.is_finite() || c.min_element() < 0.0 {
+            return Err(self.err(field, format!("must be finite and non-negative, got {c}")));
+        }
+        Ok(c)
+    }
+
+    fn camera(&self, c: &CameraFile, opts: &LoadOptions) -> Result<Camera, SceneError> {
+        let position = self.finite("camera.position", c.position)?;
+        let euler = c.yaw.is_some() || c.pitch.is_some() || c.roll.is_some();
+        let orientation = match (c.look_at, euler) {
+            (Some(_), true) => {
+                return Err(self.err("camera", "give either `look_at` (with `up`) or `yaw`/`pitch`/`roll`, not both"))
+            }
+            (Some(target), false) => {
+                let target = self.finite("camera.look_at", target)?;
+                let up = self.finite("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?;
+                Camera::look_at(position, target, up).map_err(|e| match e {
+                    crate::scene::camera::OrientationError::ZeroViewDirection => {
+                        self.err("camera.look_at", "must differ from camera.position")
+                    }
+                    crate::scene::camera::OrientationError::ZeroUp => self.err("camera.up", "must be a non-zero vector"),
+                    crate::scene::camera::OrientationError::UpParallelToView => {
+                        self.err("camera.up", "is parallel to the view direction (look_at - position)")
+                    }
+                })?
+            }
+            (None, _) => {
+                if c.up.is_some() {
+                    return Err(self.err("camera.up", "only used with `look_at`"));
+                }
+                let mut angles = [0.0; 3];
+                for (k, (name, v)) in [("yaw", c.yaw), ("pitch", c.pitch), ("roll", c.roll)].into_iter().enumerate() {
+                    let v = v.unwrap_or(0.0);
+                    if !v.is_finite() {
+                        return Err(self.err(format!("camera.{name}"), "must be finite"));
+                    }
+                    angles[k] = v;
+                }
+                Camera::yaw_pitch_roll(angles[0], angles[1], angles[2])
+            }
+        };
+        let projection = match c.projection {
+            ProjectionKind::Perspective => {
+                if c.half_height.is_some() {
+                    return Err(self.err("camera.half_height", "only used with \"projection\": \"orthographic\""));
+                }
+                let fov = c.fov.unwrap_or(45.0);
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(self.err("camera.fov", format!("must be in (0, 180) degrees, got {fov}")));
+                }
+                Projection::Perspective { vfov_deg: fov }
+            }
+            ProjectionKind::Orthographic => {
+                if c.fov.is_some() {
+                    return Err(self.err("camera.fov", "only used with \"projection\": \"perspective\""));
+                }
+                let h = c
+                    .half_height
+                    .ok_or_else(|| self.err("camera", "missing field `half_height` (required for an orthographic camera)"))?;
+                if !(h > 0.0 && h.is_finite()) {
+                    return Err(self.err("camera.half_height", format!("must be positive, got {h}")));
+                }
+                Projection::Orthographic { half_height: h }
+            }
+        };
+        let (width, height) = super::override_size(opts, c.width, c.height);
+        let max = crate::scene::MAX_IMAGE_SIDE;
+        for (name, v, cli) in [("camera.width", width, opts.width.is_some()), ("camera.height", height, opts.height.is_some())] {
+            if v == 0 || v > max {
+                let field = if cli { name.replace("camera.", "--") } else { name.to_string() };
+                return Err(self.err(field, format!("must be in 1..={max} pixels, got {v}")));
+            }
+        }
+        Ok(Camera { position, orientation, projection, width, height })
+    }
+
+    fn shaders(&self, files: &BTreeMap<String, ShaderFile>) -> Result<(Vec<Shader>, BTreeMap<String, ShaderId>), SceneError> {
+        let ids: BTreeMap<String, ShaderId> = files.keys().enumerate().map(|(i, k)| (k.clone(), i)).collect();
+        let mut shaders = Vec::new();
+        for (name, s) in files {
+            let at = format!("shaders.{name}");
+            let f = |k: &str| format!("{at}.{k}");
+            let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
+            let kind = match s.kind {
+                ShaderKind::Phong => "a phong shader",
+                ShaderKind::BlinnPhong => "a blinn_phong shader",
+                ShaderKind::Checker => "a checker shader",
+            };
+            fields_for(self.file, &at, kind, &[
+                ("diffuse", s.diffuse.is_some(), phong),
+                ("size", s.size.is_some(), !phong),
+                ("even", s.even.is_some(), !phong),
+                ("odd", s.odd.is_some(), !phong),
+            ])?;
+            for (k, present) in [("ambient", s.ambient.is_some()), ("specular", s.specular.is_some()), ("shininess", s.shininess.is_some())] {
+                if present && !phong {
+                    return Err(self.err(f(k), format!("not a field of {kind}")));
+                }
+            }
+            shaders.push(if phong {
+                let shininess = s.shininess.unwrap_or(1.0);
+                if !(shininess >= 0.0 && shininess.is_finite()) {
+                    return Err(self.err(f("shininess"), format!("must be finite and >= 0, got {shininess}")));
+                }
+                let p = Phong {
+                    ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
+                    diffuse: self.colour(&f("diffuse"), s.diffuse.unwrap_or_default())?,
+                    specular: self.colour(&f("specular"), s.specular.unwrap_or_default())?,
+                    shininess,
+                };
+                if s.kind == ShaderKind::Phong {
+                    Shader::Phong(p)
+                } else {
+                    Shader::BlinnPhong(p)
+                }
+            } else {
+                let size = s.size.unwrap_or_default();
+                if !(size > 0.0 && size.is_finite()) {
+                    return Err(self.err(f("size"), format!("must be positive, got {size}")));
+                }
+                let sub = |k: &str, v: &Option<String>| {
+                    let v = v.as_deref().unwrap_or_default();
+                    ids.get(v).copied().ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
+                };
+                Shader::Checker(Checker { size, even: sub("even", &s.even)?, odd: sub("odd", &s.odd)? })
+            });
+        }
+        Ok((shaders, ids))
+    }
+
+    fn light(&self, i: usize, l: &LightFile) -> Result<Light, SceneError> {
+        let at = format!("lights[{i}]");
+        let f = |k: &str| format!("{at}.{k}");
+        let (kind_name, needs_pos, needs_dir, spot) = match l.kind {
+            LightType::Directional => ("a directional light", false, true, false),
+            LightType::Point => ("a point light", true, false, false),
+            LightType::Spot => ("a spot light", true, true, true),
+        };
+        fields_for(self.file, &at, kind_name, &[
+            ("position", l.position.is_some(), needs_pos),
+            ("direction", l.direction.is_some(), needs_dir),
+            ("inner_angle", l.inner_angle.is_some(), spot),
+            ("outer_angle", l.outer_angle.is_some(), spot),
+        ])?;
+        let pos = || self.finite(&f("position"), l.position.unwrap_or_default());
+        let dir = || self.direction(&f("direction"), l.direction.unwrap_or_default());
+        let kind = match l.kind {
+            LightType::Directional => LightKind::Directional { direction: dir()? },
+            LightType::Point => LightKind::Point { position: pos()? },
+            LightType::Spot => {
+                let (inner, outer) = (l.inner_angle.unwrap_or_default(), l.outer_angle.unwrap_or_default());
+                if !(outer > 0.0 && outer <= 90.0) {
+                    return Err(self.err(f("outer_angle"), format!("must be in (0, 90] degrees, got {outer}")));
+                }
+                if !(inner >= 0.0 && inner < outer) {
+                    return Err(self.err(f("inner_angle"), format!("must be in [0, outer_angle) degrees, got {inner}")));
+                }
+                LightKind::Spot {
+                    position: pos()?,
+                    direction: dir()?,
+                    inner_angle: inner.to_radians(),
+                    outer_angle: outer.to_radians(),
+                }
+            }
+        };
+        let intensity = l.intensity.unwrap_or(1.0);
+        if !(intensity >= 0.0 && intensity.is_finite()) {
+            return Err(self.err(f("intensity"), format!("must be finite and >= 0, got {intensity}")));
+        }
+        Ok(Light {
+            kind,
+            intensity,
+            ambient: self.colour(&f("ambient"), l.ambient.unwrap_or_default())?,
+            diffuse: self.colour(&f("diffuse"), l.diffuse.unwrap_or([1.0; 3]))?,
+            specular: self.colour(&f("specular"), l.specular.unwrap_or([1.0; 3]))?,
+        })
+    }
+
+    fn transform(&self, at: &str, t: &TransformFile) -> Result<DMat4, SceneError> {
+        let translate = self.finite(&format!("{at}.translate"), t.translate)?;
+        let r = self.finite(&format!("{at}.rotate"), t.rotate)?;
+        let scale = match t.scale {
+            None => DVec3::ONE,
+            Some(Scale::Uniform(s)) => DVec3::splat(s),
+            Some(Scale::PerAxis(s)) => DVec3::from_array(s),
+        };
+        if !scale.is_finite() || scale.min_element() <= 0.0 {
+            return Err(self.err(format!("{at}.scale"), format!("must be finite and positive, got {scale}")));
+        }
+        let rot = DMat3::from_rotation_z(r.z.to_radians()) * DMat3::from_rotation_y(r.y.to_radians()) * DMat3::from_rotation_x(r.x.to_radians());
+        Ok(DMat4::from_translation(translate) * DMat4::from_mat3(rot) * DMat4::from_scale(scale))
+    }
+}
+
+/// Reads a JSON scene file.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::new(path, "", format!("cannot read scene: {e}")))?;
+    let de = &mut serde_json::Deserializer::from_str(&text);
+    let file: SceneFile = serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        // serde_json appends " at line L column C"; keep it, it helps.
+        SceneError::new(path, if field == "." { String::new() } else { field }, inner.to_string())
+    })?;
+    let r = Reader { file: path };
+    let camera = r.camera(&file.camera, opts)?;
+    let background = r.colour("background", file.background)?;
+    let (mut shaders, ids) = r.shaders(&file.shaders)?;
+    let mut objects = Vec::new();
+    let mut notes = Vec::new();
+    let mut files = vec![path.to_path_buf()];
+    let base = path.parent().unwrap_or(Path::new("."));
+    for (i, o) in file.objects.iter().enumerate() {
+        let at = format!("objects[{i}]");
+        let f = |k: &str| format!("{at}.{k}");
+        let (kind, needs): (&str, [bool; 6]) = match o.kind {
+            // point, normal, center, radius, vertices, file
+            ObjectKind::Plane => ("a plane", [true, true, false, false, false, false]),
+            ObjectKind::Sphere => ("a sphere", [false, false, true, true, false, false]),
+            ObjectKind::Triangle => ("a triangle", [false, false, false, false, true, false]),
+            ObjectKind::Mesh => ("a mesh", [false, false, false, false, false, true]),
+        };
+        fields_for(path, &at, kind, &[
+            ("point", o.point.is_some(), needs[0]),
+            ("normal", o.normal.is_some(), needs[1]),
+            ("center", o.center.is_some(), needs[2]),
+            ("radius", o.radius.is_some(), needs[3]),
+            ("vertices", o.vertices.is_some(), needs[4]),
+            ("file", o.file.is_some(), needs[5]),
+            ("transform", o.transform.is_some(), o.kind == ObjectKind::Mesh && o.transform.is_some()),
+        ])?;
+        let shader = match &o.shader {
+            Some(name) => Some(*ids.get(name).ok_or_else(|| r.err(f("shader"), format!("no shader named \"{name}\"")))?),
+            None if o.kind == ObjectKind::Mesh => None,
+            None => return Err(r.err(&at, format!("missing field `shader` (required for {kind})"))),
+        };
+        let shape = match o.kind {
+            ObjectKind::Plane => Shape::Plane(Plane {
+                point: r.finite(&f("point"), o.point.unwrap_or_default())?,
+                normal: r.direction(&f("normal"), o.normal.unwrap_or_default())?,
+            }),
+            ObjectKind::Sphere => {
+                let radius = o.radius.unwrap_or_default();
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(r.err(f("radius"), format!("must be positive, got {radius}")));
+                }
+                Shape::Sphere(Sphere { center: r.finite(&f("center"), o.center.unwrap_or_default())?, radius })
+            }
+            ObjectKind::Triangle => {
+                let v = o.vertices.unwrap_or_default();
+                let mut vertices = [DVec3::ZERO; 3];
+                for k in 0..3 {
+                    vertices[k] = r.finite(&f(&format!("vertices[{k}]")), v[k])?;
+                }
+                Shape::Triangle(Triangle { vertices })
+            }
+            ObjectKind::Mesh => {
+                let rel = o.file.clone().unwrap_or_default();
+                let mesh_path = base.join(&rel);
+                if !mesh_path.is_file() {
+                    return Err(r.err(f("file"), format!("no such file: {}", mesh_path.display())));
+                }
+                let m = o.transform.as_ref().map(|t| r.transform(&f("transform"), t)).transpose()?.unwrap_or(DMat4::IDENTITY);
+                let doc = super::gltf::read(&mesh_path)?;
+                notes.extend(doc.notes);
+                files.extend(doc.files);
+                let normal_m = DMat3::from_mat4(m).inverse().transpose();
+                for gm in doc.meshes {
+                    let shader = match shader {
+                        Some(s) => s,
+                        None => {
+                            let kd = gm.base_color.unwrap_or(Vec3::ONE);
+                            shaders.push(Shader::Phong(Phong { ambient: Vec3::ZERO, diffuse: kd, specular: Vec3::ZERO, shininess: 1.0 }));
+                            shaders.len() - 1
+                        }
+                    };
+                    let mut mesh = gm.mesh;
+                    for p in &mut mesh.positions {
+                        *p = m.transform_point3(*p);
+                    }
+                    if let Some(ns) = &mut mesh.normals {
+                        for n in ns.iter_mut() {
+                            *n = (normal_m * *n).normalize_or_zero();
+                        }
+                    }
+                    objects.push(Object { shape: Shape::Mesh(mesh), shader });
+                }
+                continue;
+            }
+        };
+        objects.push(Object { shape, shader: shader.unwrap_or_default() });
+    }
+    let lights = file.lights.iter().enumerate().map(|(i, l)| r.light(i, l)).collect::<Result<Vec<_>, _>>()?;
+    Ok(Loaded { scene: Scene { camera, background, shaders, objects, lights }, notes, files })
+}

@@ -1,0 +1,142 @@
+//! Writing images: PNG holds the linear colour clamped to [0, 1], sRGB-encoded,
+//! 8 bits; OpenEXR holds linear float RGB. Files are written to a temporary
+//! file beside the target and renamed into place, so a failed run never leaves
+//! a partial file at the output path.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::render::Image;
+
+/// The image formats we write, chosen by the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// 32-bit float linear OpenEXR.
+    Exr,
+}
+
+/// Why an image could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The extension is neither .png nor .exr.
+    #[error("{0}: unknown output format: expected a .png or .exr file name")]
+    UnknownFormat(String),
+    /// Creating, writing or renaming failed.
+    #[error("{path}: cannot write: {source}")]
+    Io {
+        /// The output path.
+        path: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// Encoding failed.
+    #[error("{path}: cannot encode: {source}")]
+    Encode {
+        /// The output path.
+        path: String,
+        /// The underlying error.
+        source: image::ImageError,
+    },
+}
+
+impl Format {
+    /// The format for a path's extension.
+    pub fn from_path(path: &Path) -> Result<Format, OutputError> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => Err(OutputError::UnknownFormat(path.display().to_string())),
+        }
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+pub fn srgb_encode(linear: f32) -> f32 {
+    let c = linear.clamp(0.0, 1.0);
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// 8-bit sRGB code of a linear value (clamped to [0, 1]; NaN gives 0).
+pub fn srgb8(linear: f32) -> u8 {
+    let l = if linear.is_nan() { 0.0 } else { linear };
+    (srgb_encode(l) * 255.0 + 0.5) as u8
+}
+
+/// Encodes the image in memory.
+pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageError> {
+    let mut bytes = Vec::new();
+    let cursor = &mut std::io::Cursor::new(&mut bytes);
+    match format {
+        Format::Png => {
+            let rgb: Vec<u8> = image.pixels.iter().flat_map(|p| [srgb8(p[0]), srgb8(p[1]), srgb8(p[2])]).collect();
+            image::RgbImage::from_raw(image.width, image.height, rgb)
+                .ok_or_else(size_mismatch)?
+                .write_to(cursor, image::ImageFormat::Png)?;
+        }
+        Format::Exr => {
+            let rgb: Vec<f32> = image.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+            image::Rgb32FImage::from_raw(image.width, image.height, rgb)
+                .ok_or_else(size_mismatch)?
+                .write_to(cursor, image::ImageFormat::OpenExr)?;
+        }
+    }
+    Ok(bytes)
+}
+
+fn size_mismatch() -> image::ImageError {
+    image::ImageError::Parameter(image::error::ParameterError::from_kind(
+        image::error::ParameterErrorKind::DimensionMismatch,
+    ))
+}
+
+/// Checks that `path` can be written (format known, directory exists and is
+/// writable) before any rendering is done.
+pub fn check_writable(path: &Path) -> Result<Format, OutputError> {
+    let format = Format::from_path(path)?;
+    let dir = parent_dir(path);
+    tempfile::NamedTempFile::new_in(dir).map_err(|source| OutputError::Io { path: path.display().to_string(), source })?;
+    Ok(format)
+}
+
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Encodes and writes the image atomically (temporary file, then rename).
+pub fn write_image(path: &Path, image: &Image) -> Result<(), OutputError> {
+    let format = Format::from_path(path)?;
+    let bytes = encode(image, format).map_err(|source| OutputError::Encode { path: path.display().to_string(), source })?;
+    let io = |source| OutputError::Io { path: path.display().to_string(), source };
+    let mut tmp = tempfile::NamedTempFile::new_in(parent_dir(path)).map_err(io)?;
+    tmp.write_all(&bytes).map_err(io)?;
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_matches_the_standard() {
+        // Reference values of the IEC 61966-2-1 curve.
+        assert_eq!(srgb8(0.0), 0);
+        assert_eq!(srgb8(1.0), 255);
+        assert_eq!(srgb8(2.0), 255);
+        assert_eq!(srgb8(-1.0), 0);
+        assert_eq!(srgb8(f32::NAN), 0);
+        assert_eq!(srgb8(0.5), 188); // 0.7354 * 255
+        assert_eq!(srgb8(0.18), 118); // 0.4614 * 255
+        assert_eq!(srgb8(0.002), 7); // linear segment: 12.92 * 0.002 * 255 = 6.6
+    }
+}

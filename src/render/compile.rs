@@ -1,0 +1,277 @@
+//! WGSL to SPIR-V at run time with naga: assemble the shader tree, resolve the
+//! scene's feature `override`s, validate, and write SPIR-V.
+//!
+//! naga's SPIR-V writer emits no specialisation constants, so the overrides are
+//! resolved here with `process_overrides` and each feature set gets its own
+//! SPIR-V module (the renderer caches the pipelines by feature set).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::scene::Features;
+
+/// The shader files in the order they are concatenated. WGSL module-scope
+/// declarations are order-independent; the order only fixes line numbers.
+pub const SHADER_FILES: &[&str] = &[
+    "render.wgsl",
+    "camera.wgsl",
+    "ray.wgsl",
+    "hit.wgsl",
+    "primitives/plane.wgsl",
+    "primitives/sphere.wgsl",
+    "primitives/triangle.wgsl",
+    "lights.wgsl",
+    "shading/shader.wgsl",
+    "shading/phong.wgsl",
+    "shading/blinn_phong.wgsl",
+    "shading/checker.wgsl",
+    "shadows.wgsl",
+];
+
+/// The files built into the binary, so an installed `penumbra` needs no
+/// source tree.
+const EMBEDDED: &[&str] = &[
+    include_str!("../../shaders/render.wgsl"),
+    include_str!("../../shaders/camera.wgsl"),
+    include_str!("../../shaders/ray.wgsl"),
+    include_str!("../../shaders/hit.wgsl"),
+    include_str!("../../shaders/primitives/plane.wgsl"),
+    include_str!("../../shaders/primitives/sphere.wgsl"),
+    include_str!("../../shaders/primitives/triangle.wgsl"),
+    include_str!("../../shaders/lights.wgsl"),
+    include_str!("../../shaders/shading/shader.wgsl"),
+    include_str!("../../shaders/shading/phong.wgsl"),
+    include_str!("../../shaders/shading/blinn_phong.wgsl"),
+    include_str!("../../shaders/shading/checker.wgsl"),
+    include_str!("../../shaders/shadows.wgsl"),
+];
+
+/// The compute kernel's entry point.
+pub const ENTRY_POINT: &str = "render";
+
+/// Where the WGSL comes from.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum ShaderSource {
+    /// The copy compiled into the binary.
+    #[default]
+    Embedded,
+    /// A directory laid out like `shaders/` (shader development, hot reload).
+    Directory(PathBuf),
+}
+
+/// One WGSL text made of the shader files, with a map back to them.
+#[derive(Clone, Debug)]
+pub struct Assembled {
+    /// The concatenated source.
+    pub text: String,
+    /// (file name, first line in `text` (1-based), number of lines).
+    pub files: Vec<(String, u32, u32)>,
+}
+
+/// A WGSL file could not be read, parsed or validated, or SPIR-V not written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompileError {
+    /// `file:line:column` of the problem when known, else the file or "shaders".
+    pub location: String,
+    /// What naga said, with the offending source line and a caret when known.
+    pub message: String,
+}
+
+impl fmt::Display for CompileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.location, self.message)
+    }
+}
+
+impl std::error::Error for CompileError {}
+
+impl ShaderSource {
+    /// Reads and concatenates the shader files.
+    pub fn assemble(&self) -> Result<Assembled, CompileError> {
+        let mut text = String::new();
+        let mut files = Vec::new();
+        let mut line = 1u32;
+        for (i, name) in SHADER_FILES.iter().enumerate() {
+            let body = match self {
+                ShaderSource::Embedded => EMBEDDED[i].to_string(),
+                ShaderSource::Directory(dir) => {
+                    let path = dir.join(name);
+                    std::fs::read_to_string(&path).map_err(|e| CompileError {
+                        location: path.display().to_string(),
+                        message: format!("cannot read shader: {e}"),
+                    })?
+                }
+            };
+            let label = match self {
+                ShaderSource::Embedded => format!("shaders/{name}"),
+                ShaderSource::Directory(dir) => dir.join(name).display().to_string(),
+            };
+            // Each file starts on a fresh line, whether or not it ends in one.
+            text.push_str(&body);
+            if !body.ends_with('\n') {
+                text.push('\n');
+            }
+            let lines = body.lines().count() as u32;
+            files.push((label, line, lines));
+            line += lines;
+        }
+        Ok(Assembled { text, files })
+    }
+}
+
+impl Assembled {
+    /// `file:line:col` for a 1-based line and column of the concatenation.
+    fn locate(&self, line: u32, col: u32) -> String {
+        for (name, start, count) in &self.files {
+            if line >= *start && line < start + count {
+                return format!("{name}:{}:{col}", line - start + 1);
+            }
+        }
+        format!("shaders:{line}:{col}")
+    }
+
+    fn error_at(&self, loc: Option<naga::SourceLocation>, message: String) -> CompileError {
+        let Some(loc) = loc else {
+            return CompileError { location: "shaders".into(), message };
+        };
+        let src_line = self
+            .text
+            .lines()
+            .nth(loc.line_number as usize - 1)
+            .unwrap_or("");
+        let caret = " ".repeat(loc.line_position.saturating_sub(1) as usize)
+            + &"^".repeat(loc.length.max(1) as usize);
+        CompileError {
+            location: self.locate(loc.line_number, loc.line_position),
+            message: format!("{message}\n  {src_line}\n  {caret}"),
+        }
+    }
+
+    /// Parses the WGSL (no validation): for layout checks and tools.
+    pub fn parse(&self) -> Result<naga::Module, CompileError> {
+        naga::front::wgsl::parse_str(&self.text)
+            .map_err(|e| self.error_at(e.location(&self.text), e.message().to_string()))
+    }
+
+    /// Compiles the kernel for `features` to SPIR-V 1.3 (Vulkan 1.1).
+    pub fn compile(&self, features: &Features) -> Result<Vec<u32>, CompileError> {
+        use naga::valid::{Capabilities, ValidationFlags, Validator};
+        let module = self.parse()?;
+        let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
+        let info = validator
+            .validate(&module)
+            .map_err(|e| self.error_at(e.location(&self.text), format!("{}", e.as_inner())))?;
+        let mut constants = naga::back::PipelineConstants::default();
+        for (name, on) in override_values(features) {
+            constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
+        }
+        let (module, info) = naga::back::pipeline_constants::process_overrides(
+            &module,
+            &info,
+            Some((naga::ShaderStage::Compute, ENTRY_POINT)),
+            &constants,
+        )
+        .map_err(|e| CompileError { location: "shaders".into(), message: e.to_string() })?;
+        let options = spirv_options();
+        let pipeline = naga::back::spv::PipelineOptions {
+            shader_stage: naga::ShaderStage::Compute,
+            entry_point: ENTRY_POINT.to_string(),
+        };
+        naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
+            .map_err(|e| CompileError { location: "shaders".into(), message: e.to_string() })
+    }
+}
+
+/// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
+pub fn override_values(f: &Features) -> [(&'static str, bool); 10] {
+    [
+        ("HAS_PLANES", f.planes),
+        ("HAS_SPHERES", f.spheres),
+        ("HAS_TRIANGLES", f.triangles),
+        ("HAS_VERTEX_NORMALS", f.vertex_normals),
+        ("HAS_DIRECTIONAL", f.directional_lights),
+        ("HAS_POINT", f.point_lights),
+        ("HAS_SPOT", f.spot_lights),
+        ("HAS_PHONG", f.phong),
+        ("HAS_BLINN_PHONG", f.blinn_phong),
+        ("HAS_CHECKER", f.checker),
+    ]
+}
+
+/// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we
+/// request, no debug info, and no bounds checks of naga's own on buffers
+/// (every index is bounded by the counts in `Globals`; local arrays keep
+/// naga's clamping).
+fn spirv_options() -> naga::back::spv::Options<'static> {
+    use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
+    naga::back::spv::Options {
+        lang_version: (1, 3),
+        flags: naga::back::spv::WriterFlags::empty(),
+        bounds_check_policies: BoundsCheckPolicies {
+            index: BoundsCheckPolicy::Restrict,
+            buffer: BoundsCheckPolicy::Unchecked,
+            image_load: BoundsCheckPolicy::Restrict,
+            binding_array: BoundsCheckPolicy::Restrict,
+        },
+        ..Default::default()
+    }
+}
+
+/// The default shader directory of a source checkout, if it exists.
+pub fn checkout_shader_dir() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    dir.is_dir().then_some(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_feature_set_compiles() {
+        let src = ShaderSource::Embedded.assemble().unwrap();
+        let all = Features {
+            planes: true,
+            spheres: true,
+            triangles: true,
+            vertex_normals: true,
+            directional_lights: true,
+            point_lights: true,
+            spot_lights: true,
+            phong: true,
+            blinn_phong: true,
+            checker: true,
+        };
+        let words = src.compile(&all).unwrap();
+        assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
+        assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
+        src.compile(&Features::default()).unwrap();
+    }
+
+    #[test]
+    fn errors_point_at_the_file_and_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = ShaderSource::Embedded.assemble().unwrap();
+        for (name, start, count) in &src.files {
+            let rel = name.trim_start_matches("shaders/");
+            let body: Vec<&str> = src.text.lines().skip(*start as usize - 1).take(*count as usize).collect();
+            let mut body = body.join("\n");
+            if rel == "lights.wgsl" {
+                body = body.replacen("let dist = sqrt(dist2);", "let dist = sqrt(dist2) +;", 1);
+            }
+            let path = dir.path().join(rel);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, body).unwrap();
+        }
+        let broken = ShaderSource::Directory(dir.path().to_path_buf()).assemble().unwrap();
+        let err = broken.compile(&Features::default()).unwrap_err();
+        let want_line = include_str!("../../shaders/lights.wgsl")
+            .lines()
+            .position(|l| l.contains("let dist = sqrt(dist2);"))
+            .unwrap()
+            + 1;
+        assert!(err.location.contains("lights.wgsl"), "{err}");
+        assert!(err.location.contains(&format!(":{want_line}:")), "{err}");
+        assert!(err.message.contains("sqrt(dist2) +;") && err.message.contains('^'), "{err}");
+    }
+}

@@ -1,0 +1,372 @@
+//! The GPU's view of a scene: `#[repr(C)]` mirrors of the WGSL structs in
+//! `shaders/`, and the conversion from the `f64` scene model into them.
+//!
+//! WGSL aligns `vec3<f32>` to 16 bytes, so every `vec3` is followed by a
+//! 4-byte scalar or explicit padding. The test at the bottom compares every
+//! struct's size and member offsets with naga's layouter on the real shader
+//! source, so host and shader cannot drift apart.
+//!
+//! All positions are made camera-relative in `f64` before rounding to `f32`:
+//! precision then depends on the distance from the eye, not from the world
+//! origin.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+
+use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
+
+/// Mirrors `Camera` in `shaders/camera.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Camera {
+    pub right: [f32; 3],
+    pub width: u32,
+    pub up: [f32; 3],
+    pub height: u32,
+    pub forward: [f32; 3],
+    pub orthographic: u32,
+}
+
+/// Mirrors `Globals` in `shaders/render.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Globals {
+    pub camera: Camera,
+    pub background: [f32; 3],
+    pub num_planes: u32,
+    pub num_spheres: u32,
+    pub num_triangles: u32,
+    pub num_lights: u32,
+    pub num_shaders: u32,
+}
+
+/// Mirrors `PushConstants` in `shaders/render.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PushConstants {
+    pub origin: [u32; 2],
+    pub flags: u32,
+    pub _pad: u32,
+}
+
+/// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
+pub const FLAG_WARM_UP: u32 = 1;
+
+/// Mirrors `Plane` in `shaders/primitives/plane.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Plane {
+    pub point: [f32; 3],
+    pub shader: u32,
+    pub normal: [f32; 3],
+    pub object: u32,
+}
+
+/// Mirrors `Sphere` in `shaders/primitives/sphere.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Sphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub shader: u32,
+    pub object: u32,
+    pub _pad: [u32; 2],
+}
+
+/// Mirrors `Triangle` in `shaders/primitives/triangle.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Triangle {
+    pub v0: [f32; 3],
+    pub shader: u32,
+    pub e1: [f32; 3],
+    pub object: u32,
+    pub e2: [f32; 3],
+    pub normals: u32,
+}
+
+/// `Triangle::normals` value for flat-shaded triangles.
+pub const NO_NORMALS: u32 = u32::MAX;
+
+/// Mirrors `VertexNormals` in `shaders/primitives/triangle.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct VertexNormals {
+    pub n0: [f32; 4],
+    pub n1: [f32; 4],
+    pub n2: [f32; 4],
+}
+
+/// Mirrors `Light` in `shaders/lights.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Light {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub direction: [f32; 3],
+    pub cone_scale: f32,
+    pub ambient: [f32; 3],
+    pub cone_offset: f32,
+    pub diffuse: [f32; 3],
+    pub _pad0: u32,
+    pub specular: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// Mirrors `ShaderNode` in `shaders/shading/shader.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ShaderNode {
+    pub ambient: [f32; 3],
+    pub kind: u32,
+    pub diffuse: [f32; 3],
+    pub shininess: f32,
+    pub specular: [f32; 3],
+    pub inv_size: f32,
+    pub cell_offset: [f32; 3],
+    pub parity: u32,
+    pub even: u32,
+    pub odd: u32,
+    pub _pad: [u32; 2],
+}
+
+/// Shader kinds, as in `shaders/shading/shader.wgsl`.
+pub const SHADER_PHONG: u32 = 0;
+/// Blinn-Phong shader kind.
+pub const SHADER_BLINN_PHONG: u32 = 1;
+/// Checker shader kind.
+pub const SHADER_CHECKER: u32 = 2;
+/// Light kinds, as in `shaders/lights.wgsl`.
+pub const LIGHT_DIRECTIONAL: u32 = 0;
+/// Point light kind.
+pub const LIGHT_POINT: u32 = 1;
+/// Spot light kind.
+pub const LIGHT_SPOT: u32 = 2;
+
+/// A scene laid out for the GPU.
+#[derive(Clone, Debug, Default)]
+pub struct GpuScene {
+    pub globals: Globals,
+    pub planes: Vec<Plane>,
+    pub spheres: Vec<Sphere>,
+    pub triangles: Vec<Triangle>,
+    pub vertex_normals: Vec<VertexNormals>,
+    pub lights: Vec<Light>,
+    pub shaders: Vec<ShaderNode>,
+}
+
+fn f3(v: DVec3) -> [f32; 3] {
+    v.as_vec3().to_array()
+}
+
+fn c3(v: Vec3) -> [f32; 3] {
+    v.to_array()
+}
+
+fn n4(v: DVec3) -> [f32; 4] {
+    v.as_vec3().extend(0.0).to_array()
+}
+
+impl GpuScene {
+    /// Lays out a validated scene, camera-relative.
+    pub fn new(scene: &Scene) -> GpuScene {
+        let cam = &scene.camera;
+        let eye = cam.position;
+        let (hw, hh) = cam.half_extent();
+        let camera = Camera {
+            right: f3(cam.orientation.x_axis * hw),
+            width: cam.width,
+            up: f3(cam.orientation.y_axis * hh),
+            height: cam.height,
+            forward: f3(-cam.orientation.z_axis),
+            orthographic: matches!(cam.projection, Projection::Orthographic { .. }) as u32,
+        };
+        let mut g = GpuScene::default();
+        for (object, o) in scene.objects.iter().enumerate() {
+            let (shader, object) = (o.shader as u32, object as u32);
+            let push_triangle = |v: [DVec3; 3], normals: Option<[DVec3; 3]>, g: &mut GpuScene| {
+                let normals = match normals {
+                    Some([a, b, c]) => {
+                        g.vertex_normals.push(VertexNormals { n0: n4(a), n1: n4(b), n2: n4(c) });
+                        g.vertex_normals.len() as u32 - 1
+                    }
+                    None => NO_NORMALS,
+                };
+                // Edges in f64 from exact camera-relative vertices.
+                g.triangles.push(Triangle {
+                    v0: f3(v[0] - eye),
+                    shader,
+                    e1: f3(v[1] - v[0]),
+                    object,
+                    e2: f3(v[2] - v[0]),
+                    normals,
+                });
+            };
+            match &o.shape {
+                Shape::Plane(p) => g.planes.push(Plane {
+                    point: f3(closest_point_to(p.point, p.normal, eye) - eye),
+                    shader,
+                    normal: f3(p.normal),
+                    object,
+                }),
+                Shape::Sphere(s) => g.spheres.push(Sphere {
+                    center: f3(s.center - eye),
+                    radius: s.radius as f32,
+                    shader,
+                    object,
+                    _pad: [0; 2],
+                }),
+                Shape::Triangle(t) => push_triangle(t.vertices, None, &mut g),
+                Shape::Mesh(m) => {
+                    for (i, idx) in m.indices.iter().enumerate() {
+                        let normals = m.normals.as_ref().map(|n| idx.map(|k| n[k as usize]));
+                        push_triangle(m.triangle(i).vertices, normals, &mut g);
+                    }
+                }
+            }
+        }
+        for l in &scene.lights {
+            let scale = |c: Vec3| c3(c * l.intensity);
+            let mut gl = Light {
+                ambient: c3(l.ambient),
+                diffuse: scale(l.diffuse),
+                specular: scale(l.specular),
+                ..Default::default()
+            };
+            match l.kind {
+                LightKind::Directional { direction } => {
+                    gl.kind = LIGHT_DIRECTIONAL;
+                    gl.direction = f3(direction);
+                }
+                LightKind::Point { position } => {
+                    gl.kind = LIGHT_POINT;
+                    gl.position = f3(position - eye);
+                }
+                LightKind::Spot { position, direction, inner_angle, outer_angle } => {
+                    // KHR_lights_punctual: attenuation = clamp(cos·scale + offset)².
+                    let (ci, co) = (inner_angle.cos(), outer_angle.cos());
+                    let s = 1.0 / (ci - co).max(1e-3);
+                    gl.kind = LIGHT_SPOT;
+                    gl.position = f3(position - eye);
+                    gl.direction = f3(direction);
+                    gl.cone_scale = s as f32;
+                    gl.cone_offset = (-co * s) as f32;
+                }
+            }
+            g.lights.push(gl);
+        }
+        for sh in &scene.shaders {
+            g.shaders.push(match sh {
+                Shader::Phong(p) | Shader::BlinnPhong(p) => ShaderNode {
+                    kind: if matches!(sh, Shader::Phong(_)) { SHADER_PHONG } else { SHADER_BLINN_PHONG },
+                    ambient: c3(p.ambient),
+                    diffuse: c3(p.diffuse),
+                    specular: c3(p.specular),
+                    shininess: p.shininess,
+                    ..Default::default()
+                },
+                Shader::Checker(c) => {
+                    // Split the eye's position in cells into whole cells (whose
+                    // parity we keep) and a fraction, in f64.
+                    let cells = eye / c.size;
+                    let whole = cells.floor();
+                    let parity = (whole.x + whole.y + whole.z).rem_euclid(2.0) as u32;
+                    ShaderNode {
+                        kind: SHADER_CHECKER,
+                        inv_size: (1.0 / c.size) as f32,
+                        cell_offset: f3(cells - whole),
+                        parity,
+                        even: c.even as u32,
+                        odd: c.odd as u32,
+                        ..Default::default()
+                    }
+                }
+            });
+        }
+        g.globals = Globals {
+            camera,
+            background: c3(scene.background),
+            num_planes: g.planes.len() as u32,
+            num_spheres: g.spheres.len() as u32,
+            num_triangles: g.triangles.len() as u32,
+            num_lights: g.lights.len() as u32,
+            num_shaders: g.shaders.len() as u32,
+        };
+        g
+    }
+}
+
+/// The point of a plane nearest to `eye`: a far-away `point` on the plane
+/// would lose precision when rounded; this one is as close as the plane gets.
+fn closest_point_to(point: DVec3, normal: DVec3, eye: DVec3) -> DVec3 {
+    eye - normal * normal.dot(eye - point)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    /// Every mirrored struct: its WGSL name, Rust size, and (member, offset).
+    fn host_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+        macro_rules! layout {
+            ($wgsl:literal, $t:ty, [$($f:ident),*]) => {
+                ($wgsl, size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
+            };
+        }
+        vec![
+            layout!("Camera", Camera, [right, width, up, height, forward, orthographic]),
+            layout!("Globals", Globals, [camera, background, num_planes, num_spheres, num_triangles, num_lights, num_shaders]),
+            layout!("PushConstants", PushConstants, [origin, flags, _pad]),
+            layout!("Plane", Plane, [point, shader, normal, object]),
+            layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
+            layout!("Triangle", Triangle, [v0, shader, e1, object, e2, normals]),
+            layout!("VertexNormals", VertexNormals, [n0, n1, n2]),
+            layout!("Light", Light, [position, kind, direction, cone_scale, ambient, cone_offset, diffuse, _pad0, specular, _pad1]),
+            layout!("ShaderNode", ShaderNode, [ambient, kind, diffuse, shininess, specular, inv_size, cell_offset, parity, even, odd, _pad]),
+        ]
+    }
+
+    #[test]
+    fn host_structs_match_wgsl_layout() {
+        let source = crate::render::compile::ShaderSource::Embedded.assemble().unwrap();
+        let module = naga::front::wgsl::parse_str(&source.text).unwrap();
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        for (name, size, fields) in host_layouts() {
+            let (handle, ty) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("struct {name} not found in the shaders"));
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                panic!("{name} is not a struct");
+            };
+            // Arrays of these structs stride by the WGSL size, rounded to alignment.
+            assert_eq!(*span as usize, size, "{name}: size");
+            assert_eq!(layouter[handle].size as usize, size, "{name}: layouter size");
+            let wgsl: Vec<(&str, usize)> = members
+                .iter()
+                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
+                .collect();
+            assert_eq!(wgsl, fields, "{name}: members and offsets");
+        }
+    }
+
+    #[test]
+    fn checker_offset_keeps_parity_far_away() {
+        use crate::scene::Checker;
+        let c = Checker { size: 0.5, even: 0, odd: 1 };
+        for eye in [DVec3::new(1e7 + 0.3, -2.2e5, 3.7), DVec3::new(-0.1, 0.2, 0.3)] {
+            let cells = eye / c.size;
+            let whole = cells.floor();
+            let parity = (whole.x + whole.y + whole.z).rem_euclid(2.0) as u32;
+            let frac = cells - whole;
+            for p in [DVec3::new(0.01, 0.2, -0.7), DVec3::new(-1.3, 0.9, 2.1)] {
+                let cell = (p / c.size + frac).floor();
+                let even = (cell.x + cell.y + cell.z + parity as f64).rem_euclid(2.0) == 0.0;
+                assert_eq!(even, c.is_even(eye + p));
+            }
+        }
+    }
+}

@@ -1,0 +1,279 @@
+//! The renderer: lays a scene out for the GPU, compiles (and caches) the
+//! kernel specialised to the scene's features, dispatches it once per frame
+//! and reads the image back.
+
+pub mod compile;
+pub mod layout;
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use bytemuck::Zeroable;
+
+use crate::scene::{Features, Scene};
+use crate::vulkan::{
+    BindingType, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo, DeviceSelector,
+    VulkanError,
+};
+pub use compile::{CompileError, ShaderSource};
+use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
+
+/// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
+const TILE: u32 = 8;
+
+/// Binding types of set 0, in binding order (see `shaders/`).
+const BINDINGS: [BindingType; 9] = [
+    BindingType::Uniform,          // 0 globals
+    BindingType::StorageReadOnly,  // 1 planes
+    BindingType::StorageReadOnly,  // 2 spheres
+    BindingType::StorageReadOnly,  // 3 triangles
+    BindingType::StorageReadOnly,  // 4 vertex normals
+    BindingType::StorageReadOnly,  // 5 lights
+    BindingType::StorageReadOnly,  // 6 shader nodes
+    BindingType::StorageReadWrite, // 7 image
+    BindingType::StorageReadWrite, // 8 counters
+];
+
+/// How to set up a [`Renderer`].
+#[derive(Clone, Debug, Default)]
+pub struct RendererOptions {
+    /// Which Vulkan device; `None` picks the first discrete or integrated
+    /// GPU, else the CPU device (lavapipe).
+    pub device: Option<DeviceSelector>,
+    /// Enable the Khronos validation layer and fail on any error it reports.
+    pub validation: bool,
+    /// Where the WGSL comes from.
+    pub shaders: ShaderSource,
+}
+
+/// Why a frame could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Vulkan failed or a device limit was exceeded.
+    #[error(transparent)]
+    Vulkan(#[from] VulkanError),
+    /// The WGSL did not compile.
+    #[error("shader error: {0}")]
+    Compile(#[from] CompileError),
+    /// The scene asks for more than the device can do; `field` names the
+    /// scene field (e.g. `camera.width`).
+    #[error("{field}: {message}")]
+    Scene {
+        /// The offending scene field.
+        field: String,
+        /// What limit it exceeds.
+        message: String,
+    },
+}
+
+/// A linear-light RGBA image, row 0 at the top. Alpha is 1 where a primary
+/// ray hit a surface and 0 where it saw the background.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// `width * height` pixels, row-major.
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl Image {
+    /// The pixel at column `x`, row `y` (row 0 is the top).
+    pub fn at(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// Wall-clock time of each phase of a frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Timings {
+    /// naga: WGSL to SPIR-V (zero when the kernel came from the cache).
+    pub shader_compile: Duration,
+    /// vkCreateComputePipelines (zero when cached).
+    pub pipeline_creation: Duration,
+    /// The driver's own compile at the first dispatch (lavapipe compiles
+    /// SPIR-V to machine code then), measured with an empty warm-up dispatch;
+    /// zero when cached.
+    pub driver_compile: Duration,
+    /// Laying out the scene and uploading the buffers.
+    pub upload: Duration,
+    /// The render dispatch, submit to completion.
+    pub render: Duration,
+    /// Copying the image back.
+    pub readback: Duration,
+}
+
+/// What one frame cost.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderStats {
+    /// Primary rays traced (one per pixel).
+    pub primary_rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Time per phase.
+    pub timings: Timings,
+}
+
+impl RenderStats {
+    /// All rays traced.
+    pub fn rays(&self) -> u64 {
+        self.primary_rays + self.shadow_rays
+    }
+
+    /// Millions of rays per second of the render phase.
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays() as f64 / self.timings.render.as_secs_f64().max(1e-9) / 1e6
+    }
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// The image.
+    pub image: Image,
+    /// Rays and timings.
+    pub stats: RenderStats,
+}
+
+/// Renders scenes on one Vulkan device. Create it once and call
+/// [`Renderer::render`] per scene: kernels are cached by feature set.
+pub struct Renderer {
+    // Field order matters: pipelines must drop before the context.
+    pipelines: HashMap<Features, ComputePipeline>,
+    shaders: ShaderSource,
+    context: Context,
+}
+
+impl Renderer {
+    /// Opens the Vulkan device.
+    pub fn new(opts: &RendererOptions) -> Result<Renderer, RenderError> {
+        let context = Context::new(&ContextOptions {
+            device: opts.device.clone(),
+            validation: opts.validation,
+        })?;
+        Ok(Renderer {
+            pipelines: HashMap::new(),
+            shaders: opts.shaders.clone(),
+            context,
+        })
+    }
+
+    /// The device in use.
+    pub fn device(&self) -> &DeviceInfo {
+        self.context.info()
+    }
+
+    /// Forgets compiled kernels (after a shader edit).
+    pub fn clear_pipeline_cache(&mut self) {
+        self.pipelines.clear();
+    }
+
+    /// Compiles the kernel for `features` unless cached; returns the time of
+    /// (naga, pipeline creation, driver compile).
+    fn pipeline(&mut self, features: Features) -> Result<(Duration, Duration, Duration), RenderError> {
+        if self.pipelines.contains_key(&features) {
+            return Ok(Default::default());
+        }
+        let t0 = Instant::now();
+        let spirv = self.shaders.assemble()?.compile(&features)?;
+        let t1 = Instant::now();
+        let pipeline = self.context.create_compute_pipeline(
+            &spirv,
+            compile::ENTRY_POINT,
+            &BINDINGS,
+            std::mem::size_of::<PushConstants>() as u32,
+        )?;
+        let t2 = Instant::now();
+        // Warm-up: an empty dispatch makes lavapipe compile the kernel now,
+        // so the render phase measures rendering only.
+        let dummies: Vec<_> = BINDINGS
+            .iter()
+            .map(|b| {
+                let usage = if *b == BindingType::Uniform { BufferUsage::Uniform } else { BufferUsage::Storage };
+                self.context.create_buffer("warm-up", usage, 256)
+            })
+            .collect::<Result<_, _>>()?;
+        let refs: Vec<_> = dummies.iter().collect();
+        let push = PushConstants { flags: FLAG_WARM_UP, ..Zeroable::zeroed() };
+        self.context.dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
+        let t3 = Instant::now();
+        self.pipelines.insert(features, pipeline);
+        Ok((t1 - t0, t2 - t1, t3 - t2))
+    }
+
+    /// Checks the image against the device's limits, naming the scene field.
+    fn check_size(&self, width: u32, height: u32) -> Result<(), RenderError> {
+        let limits = self.context.limits();
+        let bytes = width as u64 * height as u64 * 16;
+        if bytes > limits.max_storage_buffer_range {
+            return Err(RenderError::Scene {
+                field: "camera.width".into(),
+                message: format!(
+                    "{width}x{height} pixels need a {:.1} MiB image buffer, more than this device's maxStorageBufferRange of {:.1} MiB",
+                    bytes as f64 / 1048576.0,
+                    limits.max_storage_buffer_range as f64 / 1048576.0
+                ),
+            });
+        }
+        for (field, side, max) in [
+            ("camera.width", width, limits.max_compute_work_group_count[0]),
+            ("camera.height", height, limits.max_compute_work_group_count[1]),
+        ] {
+            if side.div_ceil(TILE) > max {
+                return Err(RenderError::Scene {
+                    field: field.into(),
+                    message: format!("{side} pixels exceed this device's limit of {} workgroups of {TILE}", max),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Renders one frame of a validated scene.
+    pub fn render(&mut self, scene: &Scene) -> Result<Frame, RenderError> {
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        self.check_size(width, height)?;
+        let (shader_compile, pipeline_creation, driver_compile) = self.pipeline(scene.features())?;
+
+        let t0 = Instant::now();
+        let gpu = GpuScene::new(scene);
+        let ctx = &self.context;
+        let storage = |label: &str, bytes: &[u8]| ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes);
+        let buffers = [
+            ctx.create_buffer_with_data("globals", BufferUsage::Uniform, bytemuck::bytes_of(&gpu.globals))?,
+            storage("planes", bytemuck::cast_slice(&gpu.planes))?,
+            storage("spheres", bytemuck::cast_slice(&gpu.spheres))?,
+            storage("triangles", bytemuck::cast_slice(&gpu.triangles))?,
+            storage("vertex normals", bytemuck::cast_slice(&gpu.vertex_normals))?,
+            storage("lights", bytemuck::cast_slice(&gpu.lights))?,
+            storage("shaders", bytemuck::cast_slice(&gpu.shaders))?,
+            ctx.create_buffer("image", BufferUsage::Storage, width as u64 * height as u64 * 16)?,
+            ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
+        ];
+        let refs: Vec<_> = buffers.iter().collect();
+        let upload = t0.elapsed();
+
+        let pipeline = &self.pipelines[&scene.features()];
+        let push = PushConstants::zeroed();
+        let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
+        let render = ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+
+        let t1 = Instant::now();
+        let image_bytes = ctx.read_buffer(&buffers[7])?;
+        let counter_bytes = ctx.read_buffer(&buffers[8])?;
+        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..(width * height * 16) as usize]);
+        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&counter_bytes[..8]);
+        let readback = t1.elapsed();
+        ctx.check_validation()?;
+
+        Ok(Frame {
+            image: Image { width, height, pixels },
+            stats: RenderStats {
+                primary_rays: counters[0] as u64,
+                shadow_rays: counters[1] as u64,
+                timings: Timings { shader_compile, pipeline_creation, driver_compile, upload, render, readback },
+            },
+        })
+    }
+}

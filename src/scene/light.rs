@@ -1,0 +1,65 @@
+//! Lights: directional, point and spot, each with an intensity and the three
+//! colours of the Phong model. The diffuse and specular colours are scaled by
+//! the intensity (and by the falloff); the ambient colour is not.
+
+use glam::{DVec3, Vec3};
+
+/// Where the light comes from and how it falls off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Parallel light travelling along `direction` (unit); equal everywhere,
+    /// no falloff, never occluded beyond the scene.
+    Directional {
+        /// Direction the light travels in (from the light into the scene).
+        direction: DVec3,
+    },
+    /// Light emitted equally in all directions from `position`; inverse-square
+    /// falloff.
+    Point {
+        /// Position, world units.
+        position: DVec3,
+    },
+    /// Point light restricted to a cone around `direction`, with the smooth
+    /// falloff of glTF's KHR_lights_punctual between the inner and outer cone
+    /// angles, and inverse-square falloff.
+    Spot {
+        /// Position, world units.
+        position: DVec3,
+        /// Cone axis (unit), pointing away from the light.
+        direction: DVec3,
+        /// Angle from the axis (radians) inside which the cone is at full
+        /// strength; 0 ≤ inner < outer.
+        inner_angle: f64,
+        /// Angle from the axis (radians) outside which there is no light;
+        /// outer ≤ π/2.
+        outer_angle: f64,
+    },
+}
+
+/// A light of the Phong model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Directional, point or spot.
+    pub kind: LightKind,
+    /// Scales the diffuse and specular colours; ≥ 0.
+    pub intensity: f32,
+    /// Ambient colour `I_a`, added unconditionally (also in shadow).
+    pub ambient: Vec3,
+    /// Diffuse colour `I_d` (before intensity and falloff).
+    pub diffuse: Vec3,
+    /// Specular colour `I_s` (before intensity and falloff).
+    pub specular: Vec3,
+}
+
+impl LightKind {
+    /// The KHR_lights_punctual cone attenuation for a spot light at
+    /// `cos_angle` = cos of the angle between the cone axis and the direction
+    /// from the light to the point: smoothstep-like
+    /// `clamp((cos θ − cos outer) / (cos inner − cos outer), 0, 1)²`.
+    pub fn spot_cone(cos_angle: f64, inner_angle: f64, outer_angle: f64) -> f64 {
+        let (ci, co) = (inner_angle.cos(), outer_angle.cos());
+        let scale = 1.0 / (ci - co).max(1e-3);
+        let a = ((cos_angle - co) * scale).clamp(0.0, 1.0);
+        a * a
+    }
+}

@@ -1,0 +1,146 @@
+//! The scene model: plain, validated data, independent of Vulkan.
+//!
+//! Loaders ([`crate::loaders`]) build a [`Scene`]; the renderer only reads it.
+//! Geometry is kept in `f64` so that the host can move everything into
+//! camera-relative coordinates before rounding to the GPU's `f32`
+//! (see [`crate::render::layout`]), which keeps far-from-origin scenes precise.
+
+pub mod camera;
+pub mod light;
+pub mod primitives;
+pub mod shading;
+mod validate;
+
+pub use camera::{Camera, Projection};
+pub use light::{Light, LightKind};
+pub use primitives::{Mesh, Plane, Sphere, Triangle};
+pub use shading::{Checker, Phong, Shader, ShaderId};
+pub use validate::{Invalid, MAX_IMAGE_SIDE};
+
+use glam::Vec3;
+
+/// One shape of the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// Infinite plane.
+    Plane(Plane),
+    /// Sphere.
+    Sphere(Sphere),
+    /// A single triangle.
+    Triangle(Triangle),
+    /// A triangle mesh (from glTF).
+    Mesh(Mesh),
+}
+
+/// A shape with the shader that colours it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// The geometry.
+    pub shape: Shape,
+    /// Index into [`Scene::shaders`].
+    pub shader: ShaderId,
+}
+
+/// Everything needed to render one image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The view frustum and image size.
+    pub camera: Camera,
+    /// Linear RGB colour of rays that hit nothing.
+    pub background: Vec3,
+    /// Shading models; objects and checkers refer to them by index.
+    pub shaders: Vec<Shader>,
+    /// The shapes.
+    pub objects: Vec<Object>,
+    /// The lights.
+    pub lights: Vec<Light>,
+}
+
+/// Which kinds of primitive, light and shader a scene uses: the renderer
+/// compiles a kernel with exactly these (a scene without spheres never pays
+/// for sphere code).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Features {
+    /// At least one infinite plane.
+    pub planes: bool,
+    /// At least one sphere.
+    pub spheres: bool,
+    /// At least one triangle (single or from a mesh).
+    pub triangles: bool,
+    /// Some triangle has per-vertex normals to interpolate.
+    pub vertex_normals: bool,
+    /// A directional light.
+    pub directional_lights: bool,
+    /// A point light.
+    pub point_lights: bool,
+    /// A spot light.
+    pub spot_lights: bool,
+    /// A Phong shader is reachable.
+    pub phong: bool,
+    /// A Blinn-Phong shader is reachable.
+    pub blinn_phong: bool,
+    /// A checker shader is reachable.
+    pub checker: bool,
+}
+
+impl Scene {
+    /// Checks every invariant the renderer relies on (finite numbers, unit-able
+    /// directions, valid indices, acyclic checkers...). Loaders call it last;
+    /// library users who build a scene by hand should too.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        validate::scene(self)
+    }
+
+    /// The kinds of primitive, light and shader this scene actually uses.
+    pub fn features(&self) -> Features {
+        let mut f = Features::default();
+        for o in &self.objects {
+            match &o.shape {
+                Shape::Plane(_) => f.planes = true,
+                Shape::Sphere(_) => f.spheres = true,
+                Shape::Triangle(_) => f.triangles = true,
+                Shape::Mesh(m) => {
+                    if !m.indices.is_empty() {
+                        f.triangles = true;
+                        f.vertex_normals |= m.normals.is_some();
+                    }
+                }
+            }
+        }
+        for l in &self.lights {
+            match l.kind {
+                LightKind::Directional { .. } => f.directional_lights = true,
+                LightKind::Point { .. } => f.point_lights = true,
+                LightKind::Spot { .. } => f.spot_lights = true,
+            }
+        }
+        let mut seen = vec![false; self.shaders.len()];
+        let mut todo: Vec<ShaderId> = self.objects.iter().map(|o| o.shader).collect();
+        while let Some(id) = todo.pop() {
+            if id >= seen.len() || std::mem::replace(&mut seen[id], true) {
+                continue;
+            }
+            match &self.shaders[id] {
+                Shader::Phong(_) => f.phong = true,
+                Shader::BlinnPhong(_) => f.blinn_phong = true,
+                Shader::Checker(c) => {
+                    f.checker = true;
+                    todo.extend([c.even, c.odd]);
+                }
+            }
+        }
+        f
+    }
+
+    /// Number of triangles over all single triangles and meshes.
+    pub fn triangle_count(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Triangle(_) => 1,
+                Shape::Mesh(m) => m.indices.len(),
+                _ => 0,
+            })
+            .sum()
+    }
+}

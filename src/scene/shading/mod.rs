@@ -1,0 +1,29 @@
+//! Shading models ("shaders" in the seminar): Phong, Blinn-Phong and the 3D
+//! checkerboard made of two sub-shaders. The GPU versions live in
+//! `shaders/shading/` under the same names.
+//!
+//! For each light the colour at a point is
+//! `k_a·I_a + [light visible]·(k_d·I_d·max(0, l·n) + k_s·I_s·max(0, r·v)^n_s)`
+//! (Blinn-Phong: `h·n` instead of `r·v`), where the specular term is zero
+//! wherever `l·n ≤ 0`.
+
+pub mod blinn_phong;
+pub mod checker;
+pub mod phong;
+
+pub use checker::Checker;
+pub use phong::Phong;
+
+/// Index into [`crate::scene::Scene::shaders`].
+pub type ShaderId = usize;
+
+/// One shading model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shader {
+    /// Phong: specular lobe around the mirror direction `r`.
+    Phong(Phong),
+    /// Blinn-Phong: specular lobe of the half vector `h` around `n`.
+    BlinnPhong(Phong),
+    /// 3D checkerboard of two sub-shaders.
+    Checker(Checker),
+}

@@ -1,0 +1,206 @@
+//! Scene invariants. Loaders check values as they read them (with their own
+//! field paths); this is the last line of defence, also for scenes built in
+//! code.
+
+use std::fmt;
+
+use glam::{DVec3, Vec3};
+
+use super::{Camera, LightKind, Projection, Scene, Shader, Shape};
+
+/// A violated invariant: the field path within the scene model
+/// (e.g. `objects[3].radius`) and what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Invalid {
+    /// Path of the field, e.g. `lights[0].direction`.
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl Invalid {
+    /// An invalid `field`.
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Invalid { field: field.into(), message: message.into() }
+    }
+}
+
+impl fmt::Display for Invalid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
+/// The largest image side we accept before asking the device; the device's
+/// own limits are checked by the renderer.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+fn finite3(field: &str, v: DVec3) -> Result<(), Invalid> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Invalid::new(field, format!("must be finite, got {v}")))
+    }
+}
+
+fn unit(field: &str, v: DVec3) -> Result<(), Invalid> {
+    finite3(field, v)?;
+    if (v.length() - 1.0).abs() > 1e-6 {
+        return Err(Invalid::new(field, format!("must have unit length, got {v}")));
+    }
+    Ok(())
+}
+
+fn colour(field: &str, c: Vec3) -> Result<(), Invalid> {
+    if !c.is_finite() || c.min_element() < 0.0 {
+        return Err(Invalid::new(field, format!("must be finite and non-negative, got {c}")));
+    }
+    Ok(())
+}
+
+pub(super) fn camera(c: &Camera) -> Result<(), Invalid> {
+    finite3("camera.position", c.position)?;
+    let o = c.orientation;
+    let ortho = (o.transpose() * o - glam::DMat3::IDENTITY).to_cols_array();
+    if !o.is_finite() || ortho.iter().any(|x| x.abs() > 1e-6) || o.determinant() < 0.0 {
+        return Err(Invalid::new("camera.orientation", "must be a rotation"));
+    }
+    match c.projection {
+        Projection::Perspective { vfov_deg } => {
+            if !(vfov_deg > 0.0 && vfov_deg < 180.0) {
+                return Err(Invalid::new("camera.fov", format!("must be in (0, 180) degrees, got {vfov_deg}")));
+            }
+        }
+        Projection::Orthographic { half_height } => {
+            if !(half_height > 0.0 && half_height.is_finite()) {
+                return Err(Invalid::new("camera.half_height", format!("must be positive, got {half_height}")));
+            }
+        }
+    }
+    for (name, v) in [("camera.width", c.width), ("camera.height", c.height)] {
+        if v == 0 || v > MAX_IMAGE_SIDE {
+            return Err(Invalid::new(name, format!("must be in 1..={MAX_IMAGE_SIDE} pixels, got {v}")));
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
+    camera(&s.camera)?;
+    colour("background", s.background)?;
+    let n = s.shaders.len();
+    for (i, sh) in s.shaders.iter().enumerate() {
+        let f = |k: &str| format!("shaders[{i}].{k}");
+        match sh {
+            Shader::Phong(p) | Shader::BlinnPhong(p) => {
+                colour(&f("ambient"), p.ambient)?;
+                colour(&f("diffuse"), p.diffuse)?;
+                colour(&f("specular"), p.specular)?;
+                if !(p.shininess >= 0.0 && p.shininess.is_finite()) {
+                    return Err(Invalid::new(f("shininess"), format!("must be finite and >= 0, got {}", p.shininess)));
+                }
+            }
+            Shader::Checker(c) => {
+                if !(c.size > 0.0 && c.size.is_finite()) {
+                    return Err(Invalid::new(f("size"), format!("must be positive, got {}", c.size)));
+                }
+                for (k, id) in [("even", c.even), ("odd", c.odd)] {
+                    if id >= n {
+                        return Err(Invalid::new(f(k), format!("shader index {id} out of range ({n} shaders)")));
+                    }
+                }
+            }
+        }
+    }
+    // Checkers nest; a cycle would make shading loop forever. Kahn-style
+    // peeling: repeatedly drop shaders whose children are all resolved.
+    let mut resolved = vec![false; n];
+    loop {
+        let mut progress = false;
+        for (i, sh) in s.shaders.iter().enumerate() {
+            if resolved[i] {
+                continue;
+            }
+            let ready = match sh {
+                Shader::Checker(c) => resolved[c.even] && resolved[c.odd],
+                _ => true,
+            };
+            if ready {
+                resolved[i] = true;
+                progress = true;
+            }
+        }
+        if !progress {
+            break;
+        }
+    }
+    if let Some(i) = resolved.iter().position(|r| !r) {
+        return Err(Invalid::new(format!("shaders[{i}]"), "checker shaders refer to each other in a cycle"));
+    }
+    for (i, o) in s.objects.iter().enumerate() {
+        let f = |k: &str| format!("objects[{i}].{k}");
+        if o.shader >= n {
+            return Err(Invalid::new(f("shader"), format!("shader index {} out of range ({n} shaders)", o.shader)));
+        }
+        match &o.shape {
+            Shape::Plane(p) => {
+                finite3(&f("point"), p.point)?;
+                unit(&f("normal"), p.normal)?;
+            }
+            Shape::Sphere(sp) => {
+                finite3(&f("center"), sp.center)?;
+                if !(sp.radius > 0.0 && sp.radius.is_finite()) {
+                    return Err(Invalid::new(f("radius"), format!("must be positive, got {}", sp.radius)));
+                }
+            }
+            Shape::Triangle(t) => {
+                for (k, v) in t.vertices.iter().enumerate() {
+                    finite3(&f(&format!("vertices[{k}]")), *v)?;
+                }
+            }
+            Shape::Mesh(m) => {
+                if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
+                    return Err(Invalid::new(f(&format!("positions[{p}]")), "must be finite"));
+                }
+                if let Some(ns) = &m.normals {
+                    if ns.len() != m.positions.len() {
+                        return Err(Invalid::new(f("normals"), "need one normal per position"));
+                    }
+                    if let Some(k) = ns.iter().position(|v| !v.is_finite()) {
+                        return Err(Invalid::new(f(&format!("normals[{k}]")), "must be finite"));
+                    }
+                }
+                let nv = m.positions.len() as u64;
+                if let Some(k) = m.indices.iter().position(|t| t.iter().any(|&x| x as u64 >= nv)) {
+                    return Err(Invalid::new(f(&format!("indices[{k}]")), format!("vertex index out of range ({nv} vertices)")));
+                }
+            }
+        }
+    }
+    for (i, l) in s.lights.iter().enumerate() {
+        let f = |k: &str| format!("lights[{i}].{k}");
+        if !(l.intensity >= 0.0 && l.intensity.is_finite()) {
+            return Err(Invalid::new(f("intensity"), format!("must be finite and >= 0, got {}", l.intensity)));
+        }
+        colour(&f("ambient"), l.ambient)?;
+        colour(&f("diffuse"), l.diffuse)?;
+        colour(&f("specular"), l.specular)?;
+        match l.kind {
+            LightKind::Directional { direction } => unit(&f("direction"), direction)?,
+            LightKind::Point { position } => finite3(&f("position"), position)?,
+            LightKind::Spot { position, direction, inner_angle, outer_angle } => {
+                finite3(&f("position"), position)?;
+                unit(&f("direction"), direction)?;
+                if !(inner_angle >= 0.0 && inner_angle < outer_angle) {
+                    return Err(Invalid::new(f("inner_angle"), format!(
+                        "must satisfy 0 <= inner_angle < outer_angle, got {} and {} degrees",
+                        inner_angle.to_degrees(), outer_angle.to_degrees())));
+                }
+                if outer_angle > std::f64::consts::FRAC_PI_2 + 1e-12 {
+                    return Err(Invalid::new(f("outer_angle"), format!("must be at most 90 degrees, got {}", outer_angle.to_degrees())));
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,336 @@
+//! Device buffers, their memory, and host upload/readback (mapped directly or via staging).
+
+use super::context::{Context, DeviceShared};
+use super::dispatch::memory_barrier;
+use super::{vk_err, VulkanError};
+use ash::vk;
+use std::ptr::NonNull;
+use std::sync::Arc;
+
+/// How shaders bind a buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BufferUsage {
+    /// Storage buffer (`var<storage>`), read-only or read-write.
+    Storage,
+    /// Uniform buffer (`var<uniform>`).
+    Uniform,
+}
+
+/// What a buffer is for, which decides its usage flags and memory type.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Device(BufferUsage),
+    Upload,
+    Readback,
+}
+
+/// A Vulkan buffer with its own dedicated memory allocation.
+pub struct Buffer {
+    pub(crate) shared: Arc<DeviceShared>,
+    pub(crate) handle: vk::Buffer,
+    memory: vk::DeviceMemory,
+    /// Size requested by the caller (at least 16); the Vulkan buffer is rounded up to 4 bytes.
+    size: u64,
+    vk_size: u64,
+    label: String,
+    role: Role,
+    /// Persistent mapping when the host accesses the memory directly.
+    mapped: Option<NonNull<u8>>,
+    coherent: bool,
+}
+
+// SAFETY: the mapping pointer is only written during creation (before the Buffer is shared) and
+// otherwise only read from; every Vulkan handle in here may be used from any thread.
+unsafe impl Send for Buffer {}
+unsafe impl Sync for Buffer {}
+
+impl Buffer {
+    /// Size in bytes (at least 16, as Vulkan forbids empty buffers).
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// The label given at creation, used in error messages.
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
+    /// True when the host maps the buffer's memory directly; false when uploads and readbacks go
+    /// through a temporary staging buffer (device-only memory, or `PENUMBRA_FORCE_STAGING=1`).
+    pub fn is_host_visible(&self) -> bool {
+        self.mapped.is_some()
+    }
+
+    /// The usage shaders bind this buffer with (None for internal staging buffers).
+    pub(crate) fn usage(&self) -> Option<BufferUsage> {
+        match self.role {
+            Role::Device(usage) => Some(usage),
+            Role::Upload | Role::Readback => None,
+        }
+    }
+
+    /// The persistent mapping; an error for buffers that go through staging.
+    fn mapping(&self) -> Result<NonNull<u8>, VulkanError> {
+        let result = vk::Result::ERROR_MEMORY_MAP_FAILED;
+        self.mapped.ok_or(VulkanError::Vk {
+            what: "vkMapMemory",
+            result,
+        })
+    }
+
+    /// Writes `data` followed by zeros into the mapped memory.
+    fn write_mapped(&self, data: &[u8]) -> Result<(), VulkanError> {
+        let ptr = self.mapping()?;
+        let len = data.len().min(self.vk_size as usize);
+        // SAFETY: the mapping covers vk_size bytes and nothing else accesses it right now.
+        unsafe {
+            std::ptr::copy_nonoverlapping(data.as_ptr(), ptr.as_ptr(), len);
+            std::ptr::write_bytes(ptr.as_ptr().add(len), 0, self.vk_size as usize - len);
+        }
+        if !self.coherent {
+            // Offset 0 + WHOLE_SIZE covers the whole mapping, so nonCoherentAtomSize is respected.
+            let range = [vk::MappedMemoryRange::default()
+                .memory(self.memory)
+                .size(vk::WHOLE_SIZE)];
+            unsafe { self.shared.device.flush_mapped_memory_ranges(&range) }
+                .map_err(vk_err("vkFlushMappedMemoryRanges"))?;
+        }
+        Ok(())
+    }
+
+    /// Copies `len` bytes out of the mapped memory.
+    fn read_mapped(&self, len: u64) -> Result<Vec<u8>, VulkanError> {
+        let ptr = self.mapping()?;
+        if !self.coherent {
+            let range = [vk::MappedMemoryRange::default()
+                .memory(self.memory)
+                .size(vk::WHOLE_SIZE)];
+            unsafe { self.shared.device.invalidate_mapped_memory_ranges(&range) }
+                .map_err(vk_err("vkInvalidateMappedMemoryRanges"))?;
+        }
+        // SAFETY: len <= vk_size, which the mapping covers; the device finished writing.
+        Ok(unsafe { std::slice::from_raw_parts(ptr.as_ptr(), len as usize) }.to_vec())
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: every submit waits for its fence, so the buffer is not in use; freeing the
+        // memory also unmaps it. Null handles (failed creation) are ignored by Vulkan.
+        unsafe {
+            self.shared.device.destroy_buffer(self.handle, None);
+            self.shared.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.1} MiB", bytes as f64 / (1024.0 * 1024.0))
+}
+
+impl Context {
+    /// Device buffer initialised with `data`. Empty data allocates a 16-byte zeroed buffer
+    /// (Vulkan forbids size 0; shaders bind dummy buffers for absent primitive kinds).
+    pub fn create_buffer_with_data(
+        &self,
+        label: &str,
+        usage: BufferUsage,
+        data: &[u8],
+    ) -> Result<Buffer, VulkanError> {
+        let buffer = self.allocate(label, Role::Device(usage), data.len() as u64)?;
+        self.upload(&buffer, data)?;
+        Ok(buffer)
+    }
+
+    /// Zero-initialised device buffer of `size` bytes (min 16) that can be read back.
+    pub fn create_buffer(
+        &self,
+        label: &str,
+        usage: BufferUsage,
+        size: u64,
+    ) -> Result<Buffer, VulkanError> {
+        let buffer = self.allocate(label, Role::Device(usage), size)?;
+        if buffer.is_host_visible() {
+            buffer.write_mapped(&[])?;
+        } else {
+            // Zeroing on the device avoids a staging buffer full of zeros.
+            self.submit(|device, cmd| unsafe {
+                device.cmd_fill_buffer(cmd, buffer.handle, 0, vk::WHOLE_SIZE, 0);
+                memory_barrier(device, cmd, vk::PipelineStageFlags::TRANSFER);
+            })?;
+        }
+        Ok(buffer)
+    }
+
+    /// Copies the whole buffer back to the host.
+    pub fn read_buffer(&self, buffer: &Buffer) -> Result<Vec<u8>, VulkanError> {
+        self.check_owned(buffer)?;
+        if buffer.is_host_visible() {
+            return buffer.read_mapped(buffer.size);
+        }
+        let staging = self.allocate(buffer.label(), Role::Readback, buffer.vk_size)?;
+        self.copy(buffer, &staging)?;
+        staging.read_mapped(buffer.size)
+    }
+
+    /// Rejects buffers created by another context (their handles are invalid on this device).
+    pub(crate) fn check_owned(&self, buffer: &Buffer) -> Result<(), VulkanError> {
+        if Arc::ptr_eq(&buffer.shared, &self.shared) {
+            return Ok(());
+        }
+        let label = &buffer.label;
+        let msg = format!("buffer '{label}' belongs to another Vulkan context");
+        Err(VulkanError::InvalidArgument(msg))
+    }
+
+    /// Writes `data` (zero-padded) into a freshly created device buffer.
+    fn upload(&self, buffer: &Buffer, data: &[u8]) -> Result<(), VulkanError> {
+        if buffer.is_host_visible() {
+            return buffer.write_mapped(data);
+        }
+        let staging = self.allocate(buffer.label(), Role::Upload, buffer.vk_size)?;
+        staging.write_mapped(data)?;
+        self.copy(&staging, buffer)
+    }
+
+    /// Copies all of `src` into `dst` (same size) on the queue and waits.
+    fn copy(&self, src: &Buffer, dst: &Buffer) -> Result<(), VulkanError> {
+        let region = [vk::BufferCopy::default().size(src.vk_size.min(dst.vk_size))];
+        self.submit(|device, cmd| unsafe {
+            device.cmd_copy_buffer(cmd, src.handle, dst.handle, &region);
+            memory_barrier(device, cmd, vk::PipelineStageFlags::TRANSFER);
+        })?;
+        Ok(())
+    }
+
+    /// Index of the first memory type allowed by `type_bits` that has all flags of the earliest
+    /// satisfiable preference.
+    fn memory_type(
+        &self,
+        type_bits: u32,
+        preferences: &[vk::MemoryPropertyFlags],
+    ) -> Option<(u32, vk::MemoryPropertyFlags)> {
+        let props = &self.memory_properties;
+        let types = props
+            .memory_types
+            .get(..props.memory_type_count as usize)
+            .unwrap_or(&props.memory_types);
+        preferences.iter().find_map(|&wanted| {
+            types
+                .iter()
+                .enumerate()
+                .find(|(i, t)| type_bits & (1 << i) != 0 && t.property_flags.contains(wanted))
+                .map(|(i, t)| (i as u32, t.property_flags))
+        })
+    }
+
+    /// Checks limits, then creates a buffer of `size` bytes (min 16) with dedicated memory.
+    fn allocate(&self, label: &str, role: Role, size: u64) -> Result<Buffer, VulkanError> {
+        let size = size.max(16);
+        // vkCmdFillBuffer works in 4-byte words; an overflow fails the limit checks below.
+        let vk_size = size.checked_next_multiple_of(4).unwrap_or(u64::MAX);
+        let limits = self.limits();
+        let mut checks = vec![("maxMemoryAllocationSize", limits.max_memory_allocation_size)];
+        match role {
+            Role::Device(BufferUsage::Storage) => {
+                checks.push(("maxStorageBufferRange", limits.max_storage_buffer_range))
+            }
+            Role::Device(BufferUsage::Uniform) => {
+                checks.push(("maxUniformBufferRange", limits.max_uniform_buffer_range))
+            }
+            Role::Upload | Role::Readback => {}
+        }
+        for (name, limit) in checks.into_iter().rev() {
+            if vk_size > limit {
+                let exact = if mib(vk_size) == mib(limit) {
+                    format!(" ({vk_size} > {limit} bytes)")
+                } else {
+                    String::new()
+                };
+                return Err(VulkanError::Limit(format!(
+                    "buffer '{label}' needs {} but this device's {name} is {}{exact}",
+                    mib(vk_size),
+                    mib(limit)
+                )));
+            }
+        }
+
+        use vk::BufferUsageFlags as U;
+        use vk::MemoryPropertyFlags as M;
+        let transfer = U::TRANSFER_SRC | U::TRANSFER_DST;
+        let (usage, preferences): (_, &[M]) = match role {
+            Role::Device(BufferUsage::Storage) => {
+                (U::STORAGE_BUFFER | transfer, &[M::DEVICE_LOCAL, M::empty()])
+            }
+            Role::Device(BufferUsage::Uniform) => {
+                (U::UNIFORM_BUFFER | transfer, &[M::DEVICE_LOCAL, M::empty()])
+            }
+            Role::Upload => (
+                transfer,
+                &[M::HOST_VISIBLE | M::HOST_COHERENT, M::HOST_VISIBLE],
+            ),
+            Role::Readback => (
+                transfer,
+                &[M::HOST_VISIBLE | M::HOST_CACHED, M::HOST_VISIBLE],
+            ),
+        };
+        let device = &self.shared.device;
+        let info = vk::BufferCreateInfo::default()
+            .size(vk_size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info; the Buffer value below owns (and on error destroys) the handle.
+        let handle =
+            unsafe { device.create_buffer(&info, None) }.map_err(vk_err("vkCreateBuffer"))?;
+        let mut buffer = Buffer {
+            shared: self.shared.clone(),
+            handle,
+            memory: vk::DeviceMemory::null(),
+            size,
+            vk_size,
+            label: label.to_string(),
+            role,
+            mapped: None,
+            coherent: true,
+        };
+        let requirements = unsafe { device.get_buffer_memory_requirements(handle) };
+        let (type_index, flags) = self
+            .memory_type(requirements.memory_type_bits, preferences)
+            .ok_or_else(|| {
+                VulkanError::Limit(format!("no suitable memory type for buffer '{label}'"))
+            })?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(requirements.size)
+            .memory_type_index(type_index);
+        buffer.memory =
+            unsafe { device.allocate_memory(&alloc, None) }.map_err(|result| match result {
+                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                    VulkanError::Limit(format!(
+                        "allocating {} for buffer '{label}' failed: {result}",
+                        mib(requirements.size)
+                    ))
+                }
+                result => VulkanError::Vk {
+                    what: "vkAllocateMemory",
+                    result,
+                },
+            })?;
+        unsafe { device.bind_buffer_memory(handle, buffer.memory, 0) }
+            .map_err(vk_err("vkBindBufferMemory"))?;
+        let map_device_memory = flags.contains(M::HOST_VISIBLE) && !self.force_staging;
+        if matches!(role, Role::Upload | Role::Readback) || map_device_memory {
+            let ptr = unsafe {
+                device.map_memory(
+                    buffer.memory,
+                    0,
+                    vk::WHOLE_SIZE,
+                    vk::MemoryMapFlags::empty(),
+                )
+            }
+            .map_err(vk_err("vkMapMemory"))?;
+            buffer.mapped = NonNull::new(ptr.cast::<u8>());
+            buffer.coherent = flags.contains(M::HOST_COHERENT);
+        }
+        Ok(buffer)
+    }
+}
