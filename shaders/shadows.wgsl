@@ -6,9 +6,9 @@
 //   primitive it starts on;
 // * a sphere shadows a point on itself exactly when the ray heads into it, and
 //   then along the whole chord, so that case is decided analytically;
-// * against every other primitive (neighbouring mesh triangles) the origin is
-//   pushed off the surface by a few ULPs along the geometric normal, as in
-//   Wächter and Binder, "A Fast and Robust Method for Avoiding
+// * for a triangle hit, against every other primitive (neighbouring mesh
+//   triangles) the origin is pushed off the surface by a few ULPs along the
+//   geometric normal, as in Wächter and Binder, "A Fast and Robust Method for Avoiding
 //   Self-Intersection" (Ray Tracing Gems, 2019). The offset scales with the
 //   coordinates' magnitude, so it holds far from the origin too.
 
@@ -29,7 +29,15 @@ fn occluded(hit: Hit, ls: LightSample) -> bool {
     if dot(ls.to_light, hit.geometric_normal) <= 0.0 {
         return true;
     }
-    let ray = Ray(offset_ray_origin(hit.position, hit.geometric_normal), ls.to_light);
+    // Only triangles need the offset (their neighbours): planes and spheres
+    // never intersect themselves here, and an offset of 256 ulps of the
+    // camera-relative position would shift their shadows, and let light leak
+    // under thin occluders seen from afar.
+    var origin = hit.position;
+    if hit.kind == KIND_TRIANGLE {
+        origin = offset_ray_origin(hit.position, hit.geometric_normal);
+    }
+    let ray = Ray(origin, ls.to_light);
     let t_max = ls.distance;
     if HAS_PLANES {
         for (var i = 0u; i < globals.num_planes; i++) {

@@ -13,7 +13,11 @@ use penumbra::render::{RenderError, Renderer, RendererOptions, ShaderSource};
 use penumbra::vulkan::{Context, DeviceSelector};
 
 #[derive(Parser)]
-#[command(name = "penumbra", version, about = "Headless ray tracer in Vulkan compute shaders (lavapipe or any Vulkan GPU)")]
+#[command(
+    name = "penumbra",
+    version,
+    about = "Headless ray tracer in Vulkan compute shaders (lavapipe or any Vulkan GPU)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -70,13 +74,19 @@ fn render(
         eprintln!("note: {note}");
     }
     let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
-    let mut renderer = Renderer::new(&RendererOptions { device, validation, shaders })?;
+    let mut renderer = Renderer::new(&RendererOptions {
+        device,
+        validation,
+        shaders,
+    })?;
     let frame = renderer.render(&loaded.scene).map_err(|e| match e {
         // Device limits name a scene field: say which file.
         RenderError::Scene { field, message } => {
             let field = match (field.as_str(), width.is_some(), height.is_some()) {
                 ("camera.width", true, _) => "--width".to_string(),
                 ("camera.height", _, true) => "--height".to_string(),
+                ("camera.width/camera.height", true, _)
+                | ("camera.width/camera.height", _, true) => "--width/--height".to_string(),
                 _ => field,
             };
             anyhow::anyhow!("{}: {field}: {message}", scene.display())
@@ -125,9 +135,15 @@ fn devices() -> anyhow::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render { scene, output, width, height, device, shaders, validate } => {
-            render(scene, output, width, height, device, shaders, validate)
-        }
+        Command::Render {
+            scene,
+            output,
+            width,
+            height,
+            device,
+            shaders,
+            validate,
+        } => render(scene, output, width, height, device, shaders, validate),
         Command::Devices => devices(),
     };
     match result {

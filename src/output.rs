@@ -23,28 +23,34 @@ pub enum OutputError {
     /// The extension is neither .png nor .exr.
     #[error("{0}: unknown output format: expected a .png or .exr file name")]
     UnknownFormat(String),
-    /// Creating, writing or renaming failed.
-    #[error("{path}: cannot write: {source}")]
+    /// Creating, writing or renaming failed. (The cause is in the message,
+    /// so it is not also a `source()`: `anyhow`'s `{:#}` would print it twice.)
+    #[error("{path}: cannot write: {error}")]
     Io {
         /// The output path.
         path: String,
         /// The underlying error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Encoding failed.
-    #[error("{path}: cannot encode: {source}")]
+    #[error("{path}: cannot encode: {error}")]
     Encode {
         /// The output path.
         path: String,
         /// The underlying error.
-        source: image::ImageError,
+        error: image::ImageError,
     },
 }
 
 impl Format {
     /// The format for a path's extension.
     pub fn from_path(path: &Path) -> Result<Format, OutputError> {
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
             Some("png") => Ok(Format::Png),
             Some("exr") => Ok(Format::Exr),
             _ => Err(OutputError::UnknownFormat(path.display().to_string())),
@@ -74,13 +80,21 @@ pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageErro
     let cursor = &mut std::io::Cursor::new(&mut bytes);
     match format {
         Format::Png => {
-            let rgb: Vec<u8> = image.pixels.iter().flat_map(|p| [srgb8(p[0]), srgb8(p[1]), srgb8(p[2])]).collect();
+            let rgb: Vec<u8> = image
+                .pixels
+                .iter()
+                .flat_map(|p| [srgb8(p[0]), srgb8(p[1]), srgb8(p[2])])
+                .collect();
             image::RgbImage::from_raw(image.width, image.height, rgb)
                 .ok_or_else(size_mismatch)?
                 .write_to(cursor, image::ImageFormat::Png)?;
         }
         Format::Exr => {
-            let rgb: Vec<f32> = image.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+            let rgb: Vec<f32> = image
+                .pixels
+                .iter()
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
             image::Rgb32FImage::from_raw(image.width, image.height, rgb)
                 .ok_or_else(size_mismatch)?
                 .write_to(cursor, image::ImageFormat::OpenExr)?;
@@ -100,7 +114,22 @@ fn size_mismatch() -> image::ImageError {
 pub fn check_writable(path: &Path) -> Result<Format, OutputError> {
     let format = Format::from_path(path)?;
     let dir = parent_dir(path);
-    tempfile::NamedTempFile::new_in(dir).map_err(|source| OutputError::Io { path: path.display().to_string(), source })?;
+    // Say what is wrong in the user's terms rather than through the name of
+    // the temporary file that could not be created.
+    let plain = |msg: String| OutputError::Io {
+        path: path.display().to_string(),
+        error: std::io::Error::other(msg),
+    };
+    if path.is_dir() {
+        return Err(plain("is a directory".into()));
+    }
+    if !dir.is_dir() {
+        return Err(plain(format!("directory {} does not exist", dir.display())));
+    }
+    tempfile::NamedTempFile::new_in(dir).map_err(|error| OutputError::Io {
+        path: path.display().to_string(),
+        error,
+    })?;
     Ok(format)
 }
 
@@ -114,8 +143,14 @@ fn parent_dir(path: &Path) -> &Path {
 /// Encodes and writes the image atomically (temporary file, then rename).
 pub fn write_image(path: &Path, image: &Image) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    let bytes = encode(image, format).map_err(|source| OutputError::Encode { path: path.display().to_string(), source })?;
-    let io = |source| OutputError::Io { path: path.display().to_string(), source };
+    let bytes = encode(image, format).map_err(|error| OutputError::Encode {
+        path: path.display().to_string(),
+        error,
+    })?;
+    let io = |error| OutputError::Io {
+        path: path.display().to_string(),
+        error,
+    };
     let mut tmp = tempfile::NamedTempFile::new_in(parent_dir(path)).map_err(io)?;
     tmp.write_all(&bytes).map_err(io)?;
     tmp.as_file().sync_all().map_err(io)?;

@@ -1,12 +1,958 @@
-//! TEMPORARY STUB (replaced by the real loader).
+//! glTF 2.0 files (`.gltf` with external or embedded buffers, `.glb`): the
+//! triangle meshes, the first camera and the KHR_lights_punctual lights of the
+//! default scene, with every node transform applied.
+//!
+//! The `gltf` crate parses and validates the JSON; its validation reports field
+//! paths, which become [`SceneError::field`]. Buffers and accessors are read
+//! here instead of by `gltf::import` and its `Reader`: `import` also decodes
+//! images (failing on a missing texture) and pads buffers, which lets a short
+//! one pass its length check, and the reader trusts byte ranges and strides
+//! and can panic on inconsistent files. Every range is checked before a byte is
+//! read, so no file content can make this module panic.
+
+use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
-use crate::scene::{Light, Mesh, Projection};
+
+use glam::{DMat3, DMat4, DQuat, DVec3, DVec4, Vec3};
+use gltf::accessor::{sparse::IndexType, Accessor, DataType, Dimensions};
+use gltf::buffer::{Source, View};
+use gltf::json::validation::Checked;
+use gltf::khr_lights_punctual::Kind;
+use gltf::mesh::{Mode, Semantic};
+use gltf::scene::Transform;
+
+use super::{LoadOptions, Loaded};
+use crate::scene::{
+    Camera, Light, LightKind, Mesh, Object, Phong, Projection, Scene, Shader, Shape,
+};
 use crate::SceneError;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// One triangle mesh from the file: world-space geometry and its material's base colour.
 #[derive(Clone, Debug)]
-pub struct GltfMesh { pub mesh: Mesh, pub base_color: Option<glam::Vec3>, pub name: String }
+pub struct GltfMesh {
+    /// Triangle list with positions and normals in world space (node transforms applied).
+    pub mesh: Mesh,
+    /// Linear RGB of the material's `baseColorFactor`; `None` when the primitive has no material.
+    pub base_color: Option<Vec3>,
+    /// Where it came from, for messages, e.g. `node 'Bunny' mesh 0 primitive 0`.
+    pub name: String,
+}
+
+/// The camera of the file, placed by its node's world transform.
 #[derive(Clone, Copy, Debug)]
-pub struct GltfCamera { pub position: glam::DVec3, pub orientation: glam::DMat3, pub projection: Projection, pub aspect_ratio: Option<f64> }
+pub struct GltfCamera {
+    /// Eye position, world units.
+    pub position: DVec3,
+    /// Rotation only (node scale removed): columns right, up, back; it looks along −Z.
+    pub orientation: DMat3,
+    /// `yfov` as a vertical field of view, or `ymag` as the orthographic half height.
+    pub projection: Projection,
+    /// The perspective camera's `aspectRatio`, if given.
+    pub aspect_ratio: Option<f64>,
+}
+
+/// Everything penumbra uses from a glTF file.
 #[derive(Clone, Debug)]
-pub struct GltfDocument { pub meshes: Vec<GltfMesh>, pub camera: Option<GltfCamera>, pub lights: Vec<Light>, pub notes: Vec<String>, pub files: Vec<PathBuf> }
-pub fn read(path: &Path) -> Result<GltfDocument, SceneError> { Err(SceneError::new(path, "", "stub")) }
-pub fn load(path: &Path, _opts: &super::LoadOptions) -> Result<super::Loaded, SceneError> { Err(SceneError::new(path, "", "stub")) }
+pub struct GltfDocument {
+    /// One entry per triangle primitive instanced in the default scene.
+    pub meshes: Vec<GltfMesh>,
+    /// The first camera instanced by a node of the default scene (depth-first order).
+    pub camera: Option<GltfCamera>,
+    /// The KHR_lights_punctual lights instanced in the default scene.
+    pub lights: Vec<Light>,
+    /// Notes for the user about parts of the file that are not used; one line each.
+    pub notes: Vec<String>,
+    /// The `.gltf`/`.glb` itself, then every external buffer file read.
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads the file's default scene (its `scene`, else scene 0).
+pub fn read(path: &Path) -> Result<GltfDocument> {
+    read_scene(path).map(|(doc, _)| doc)
+}
+
+/// `penumbra render model.glb`: the whole scene from a glTF file, with a
+/// framing camera and a default light when the file has none.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    let (doc, scene_index) = read_scene(path)?;
+    let mut notes = doc.notes;
+    if doc.meshes.iter().all(|m| m.mesh.indices.is_empty()) {
+        let field = scene_index.map_or("scenes".into(), |k| format!("scenes[{k}]"));
+        let message = "no triangle meshes in the default scene";
+        return Err(SceneError::new(path, field, message));
+    }
+
+    // One Phong shader per distinct colour, in order of first use.
+    let mut colours: Vec<Vec3> = Vec::new();
+    let mut objects = Vec::with_capacity(doc.meshes.len());
+    for m in doc.meshes {
+        let colour = m.base_color.unwrap_or(Vec3::ONE);
+        let shader = colours
+            .iter()
+            .position(|&c| c == colour)
+            .unwrap_or_else(|| {
+                colours.push(colour);
+                colours.len() - 1
+            });
+        objects.push(Object {
+            shape: Shape::Mesh(m.mesh),
+            shader,
+        });
+    }
+    let phong = |diffuse| Phong {
+        ambient: Vec3::ZERO,
+        diffuse,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+    };
+    let shaders = colours
+        .into_iter()
+        .map(|c| Shader::Phong(phong(c)))
+        .collect();
+
+    let (width, height) = image_size(opts, doc.camera.and_then(|c| c.aspect_ratio));
+    let camera = match doc.camera {
+        Some(c) => Camera {
+            position: c.position,
+            orientation: c.orientation,
+            projection: c.projection,
+            width,
+            height,
+        },
+        None => {
+            notes.push(format!(
+                "no camera in {}: using a framing camera",
+                path.display()
+            ));
+            framing_camera(path, &objects, width, height)?
+        }
+    };
+    let mut lights = doc.lights;
+    if lights.is_empty() {
+        notes.push(format!(
+            "no lights in {}: using a default directional light",
+            path.display()
+        ));
+        lights.push(default_light(&camera));
+    }
+    let scene = Scene {
+        camera,
+        background: Vec3::ZERO,
+        shaders,
+        objects,
+        lights,
+    };
+    Ok(Loaded {
+        scene,
+        notes,
+        files: doc.files,
+    })
+}
+
+/// `--width`/`--height` where given; otherwise derived from the other side and
+/// the file's aspect ratio (4:3 without one), or 1024 pixels wide.
+fn image_size(opts: &LoadOptions, aspect: Option<f64>) -> (u32, u32) {
+    let aspect = aspect.unwrap_or(4.0 / 3.0);
+    // `as` saturates, so absurd sizes reach the scene's validation instead of wrapping.
+    let side = |x: f64| (x.round() as u32).max(1);
+    let (w, h) = match (opts.width, opts.height) {
+        (Some(w), None) => (w, side(f64::from(w) / aspect)),
+        (None, Some(h)) => (side(f64::from(h) * aspect), h),
+        _ => (1024, side(1024.0 / aspect)),
+    };
+    super::override_size(opts, w, h)
+}
+
+/// Looks at the centre of the meshes' bounding box from direction (1, 0.6, 1.4)
+/// with a 45° vertical field of view, far enough back that the bounding sphere
+/// fits the narrower field of view with a 10% margin.
+fn framing_camera(path: &Path, objects: &[Object], width: u32, height: u32) -> Result<Camera> {
+    let bounds = objects.iter().filter_map(|o| match &o.shape {
+        Shape::Mesh(m) => m.bounds(),
+        _ => None,
+    });
+    let (lo, hi) = bounds
+        .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
+        .unwrap_or((DVec3::ZERO, DVec3::ZERO));
+    let centre = (lo + hi) * 0.5;
+    // A single point has no size; any distance frames it.
+    let half_diagonal = (hi - lo).length() * 0.5;
+    let radius = if half_diagonal > 0.0 {
+        half_diagonal
+    } else {
+        1.0
+    };
+    let vfov_deg = 45.0_f64;
+    let half_v = (vfov_deg * 0.5).to_radians();
+    let half_h = (half_v.tan() * f64::from(width) / f64::from(height)).atan();
+    let distance = 1.1 * radius / half_v.min(half_h).sin();
+    let position = centre + DVec3::new(1.0, 0.6, 1.4).normalize() * distance;
+    let orientation = Camera::look_at(position, centre, DVec3::Y)
+        .map_err(|e| SceneError::new(path, "", format!("cannot place a framing camera: {e:?}")))?;
+    let projection = Projection::Perspective { vfov_deg };
+    Ok(Camera {
+        position,
+        orientation,
+        projection,
+        width,
+        height,
+    })
+}
+
+/// A white directional light from over the viewer's shoulder: along the view,
+/// downwards and towards the left of the image.
+fn default_light(camera: &Camera) -> Light {
+    let o = camera.orientation;
+    let direction = (-o.z_axis - o.y_axis - 0.5 * o.x_axis).normalize();
+    Light {
+        kind: LightKind::Directional { direction },
+        intensity: 1.0,
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ONE,
+    }
+}
+
+/// [`read`], also returning the index of the scene used (`None`: the file has no scene).
+fn read_scene(path: &Path) -> Result<(GltfDocument, Option<usize>)> {
+    let data = std::fs::read(path)
+        .map_err(|e| SceneError::new(path, "", format!("cannot read the glTF file: {e}")))?;
+    let (json, blob) = if data.starts_with(b"glTF") {
+        split_glb(path, &data)?
+    } else {
+        (&data[..], None)
+    };
+    let document = parse_json(path, json)?;
+    let doc = GltfDocument {
+        meshes: vec![],
+        camera: None,
+        lights: vec![],
+        notes: vec![],
+        files: vec![path.to_path_buf()],
+    };
+    let mut r = Reader {
+        file: path,
+        buffers: Vec::new(),
+        doc,
+        flags: Flags::default(),
+    };
+    r.load_buffers(&document, blob)?;
+    let Some(scene) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    else {
+        return Ok((r.doc, None));
+    };
+    r.flags.animated = document.animations().len() > 0;
+
+    // Depth first with children in file order; a stack rather than recursion,
+    // as a long chain of nodes is legal.
+    let mut visited = vec![false; document.nodes().len()];
+    let mut stack: Vec<_> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    stack.reverse();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            // glTF requires disjoint trees; this also stops cycles.
+            let message = format!("is reached twice from scene {}", scene.index());
+            return r.fail(format!("nodes[{}]", node.index()), message);
+        }
+        let world = parent * r.local_transform(&node)?;
+        r.node(&node, &world)?;
+        let first = stack.len();
+        stack.extend(node.children().map(|c| (c, world)));
+        stack[first..].reverse();
+    }
+
+    let (file, f, notes) = (path.display(), r.flags, &mut r.doc.notes);
+    if f.skipped > 0 {
+        notes.push(format!(
+            "{file}: skipped {} point/line primitives",
+            f.skipped
+        ));
+    }
+    if f.animated {
+        let note = "skins, morph targets and animations are not applied: static pose";
+        notes.push(format!("{file}: {note}"));
+    }
+    if f.textured {
+        notes.push(format!(
+            "{file}: textures are not applied; baseColorFactor only"
+        ));
+    }
+    if f.ranged {
+        let note = "light range is ignored: penumbra uses pure inverse-square falloff";
+        notes.push(format!("{file}: {note}"));
+    }
+    Ok((r.doc, Some(scene.index())))
+}
+
+/// Splits a binary glTF into its JSON chunk and optional BIN chunk, checking
+/// every length (the `gltf` crate underflows on a header length below 12).
+fn split_glb<'d>(path: &Path, data: &'d [u8]) -> Result<(&'d [u8], Option<Vec<u8>>)> {
+    let err = |msg: String| SceneError::new(path, "", format!("invalid GLB: {msg}"));
+    let word = |at: usize| -> Option<usize> {
+        let bytes = data.get(at..at.checked_add(4)?)?;
+        Some(u32::from_le_bytes(bytes.try_into().ok()?) as usize)
+    };
+    if word(4) != Some(2) {
+        return Err(err(format!("version {:?}, expected 2", word(4))));
+    }
+    let total = word(8).unwrap_or(0);
+    if total < 12 || total > data.len() {
+        return Err(err(format!(
+            "header says {total} bytes, the file has {}",
+            data.len()
+        )));
+    }
+    let data = &data[..total];
+    let mut chunks = Vec::new();
+    let mut at = 12;
+    while at < total {
+        let (len, kind) = (word(at), data.get(at + 4..at + 8));
+        let body = len.and_then(|len| data.get(at + 8..(at + 8).checked_add(len)?));
+        let (Some(len), Some(kind), Some(body)) = (len, kind, body) else {
+            return Err(err(format!("chunk {} runs past the end", chunks.len())));
+        };
+        chunks.push((kind, body));
+        at += 8 + len.div_ceil(4) * 4; // chunks are 4-byte aligned
+    }
+    match chunks.as_slice() {
+        [(b"JSON", json), rest @ ..] => {
+            let bin = rest.iter().find(|(kind, _)| *kind == b"BIN\0");
+            Ok((json, bin.map(|(_, b)| b.to_vec())))
+        }
+        _ => Err(err("the first chunk is not JSON".into())),
+    }
+}
+
+/// Deserialises and validates the JSON, reporting the path of the offending field.
+fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
+    let invalid = |field: String, e: &dyn std::fmt::Display| {
+        SceneError::new(path, field, format!("invalid glTF JSON: {e}"))
+    };
+    let mut de = serde_json::Deserializer::from_slice(json);
+    let root: gltf::json::Root = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let field = Some(e.path().to_string())
+            .filter(|p| p != ".")
+            .unwrap_or_default();
+        invalid(field, e.inner())
+    })?;
+    de.end().map_err(|e| invalid(String::new(), &e))?;
+    // gltf-json 1.4.1's validation indexes `accessors` with each POSITION
+    // before checking the index, so a dangling one would panic there.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim.attributes.get(&Checked::Valid(Semantic::Positions));
+            if position.is_some_and(|i| i.value() >= root.accessors.len()) {
+                let field = format!("meshes[{m}].primitives[{p}].attributes.POSITION");
+                return Err(SceneError::new(path, field, "Index out of bounds"));
+            }
+        }
+    }
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let more = match errors.len() {
+                0 | 1 => String::new(),
+                n => format!(" (and {} more problems)", n - 1),
+            };
+            let (field, message) = errors.first().map_or_else(Default::default, |(p, e)| {
+                (gltf_path(&p.to_string()), e.to_string())
+            });
+            SceneError::new(path, field, format!("{message}{more}"))
+        }
+        other => SceneError::new(path, "", format!("invalid glTF: {other}")),
+    })
+}
+
+/// The `gltf` crate's field path spelled as in the file and in this module's
+/// own messages: `attributes["POSITION"]` as `attributes.POSITION`.
+fn gltf_path(path: &str) -> String {
+    path.replace("[\"", ".")
+        .replace("\"]", "")
+        .replace("khrLightsPunctual", "KHR_lights_punctual")
+}
+
+/// Things worth one note each, gathered while walking the scene.
+#[derive(Clone, Copy, Debug, Default)]
+struct Flags {
+    skipped: usize,
+    animated: bool,
+    textured: bool,
+    ranged: bool,
+}
+
+/// Walks one document: its buffers, then the nodes of the default scene.
+struct Reader<'a> {
+    file: &'a Path,
+    /// One per `buffers[i]`, exactly `byteLength` long.
+    buffers: Vec<Vec<u8>>,
+    doc: GltfDocument,
+    flags: Flags,
+}
+
+impl Reader<'_> {
+    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::new(self.file, field, message)
+    }
+
+    fn fail<T>(&self, field: impl Into<String>, message: impl Into<String>) -> Result<T> {
+        Err(self.err(field, message))
+    }
+
+    /// Reads every buffer: the GLB binary chunk, a base64 `data:` URI or a file
+    /// relative to the glTF file.
+    fn load_buffers(&mut self, document: &gltf::Document, mut blob: Option<Vec<u8>>) -> Result<()> {
+        let base = self.file.parent().unwrap_or(Path::new(""));
+        for buffer in document.buffers() {
+            let f = |k: &str| format!("buffers[{}]{k}", buffer.index());
+            let mut data = match buffer.source() {
+                Source::Bin => match blob.take() {
+                    Some(blob) => blob,
+                    None => return self.fail(f(""), "refers to a GLB binary chunk the file lacks"),
+                },
+                Source::Uri(uri) if uri.starts_with("data:") => {
+                    let payload = uri
+                        .split_once(";base64,")
+                        .and_then(|(_, b)| decode_base64(b));
+                    payload.ok_or_else(|| self.err(f(".uri"), "is not a base64 data: URI"))?
+                }
+                Source::Uri(uri) => {
+                    let Some(relative) = percent_decode(uri).filter(|_| !uri.contains(':')) else {
+                        let message = "is neither a relative path nor a base64 data: URI";
+                        return self.fail(f(".uri"), message);
+                    };
+                    let file = base.join(relative);
+                    let data = std::fs::read(&file).map_err(|e| {
+                        self.err(f(".uri"), format!("cannot read {}: {e}", file.display()))
+                    })?;
+                    self.doc.files.push(file);
+                    data
+                }
+            };
+            if data.len() < buffer.length() {
+                let message = format!(
+                    "is {} but the data has {} bytes",
+                    buffer.length(),
+                    data.len()
+                );
+                return self.fail(f(".byteLength"), message);
+            }
+            data.truncate(buffer.length());
+            self.buffers.push(data);
+        }
+        Ok(())
+    }
+
+    /// The node's local matrix, from `matrix` or translation/rotation/scale.
+    fn local_transform(&self, node: &gltf::Node) -> Result<DMat4> {
+        let field = format!("nodes[{}]", node.index());
+        let m = match node.transform() {
+            Transform::Matrix { matrix } => {
+                DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+            }
+            Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } => {
+                // glTF requires unit quaternions; normalising keeps slightly-off files rigid.
+                let Some(q) = DVec4::from_array(rotation.map(f64::from)).try_normalize() else {
+                    return self.fail(format!("{field}.rotation"), "must be a unit quaternion");
+                };
+                let scale = DVec3::from_array(scale.map(f64::from));
+                let translation = DVec3::from_array(translation.map(f64::from));
+                DMat4::from_scale_rotation_translation(scale, DQuat::from_vec4(q), translation)
+            }
+        };
+        if !m.is_finite() {
+            return self.fail(field, "transform must be finite");
+        }
+        Ok(m)
+    }
+
+    /// Collects the node's meshes, camera and light.
+    fn node(&mut self, node: &gltf::Node, world: &DMat4) -> Result<()> {
+        self.flags.animated |= node.skin().is_some();
+        if let Some(mesh) = node.mesh() {
+            let label = match node.name() {
+                Some(name) => format!("node '{name}' mesh {}", mesh.index()),
+                None => format!("node {} mesh {}", node.index(), mesh.index()),
+            };
+            for prim in mesh.primitives() {
+                let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+                let name = format!("{label} primitive {}", prim.index());
+                if let Some(m) = self.primitive(&prim, world, &field, name)? {
+                    self.doc.meshes.push(m);
+                }
+            }
+        }
+        if let (Some(camera), None) = (node.camera(), self.doc.camera) {
+            self.doc.camera = Some(self.camera(&camera, world, node.index())?);
+        }
+        if let Some(light) = node.light() {
+            let light = self.light(&light, world, node.index())?;
+            self.doc.lights.push(light);
+        }
+        Ok(())
+    }
+
+    /// One primitive as a world-space triangle list; `None` for points and lines.
+    fn primitive(
+        &mut self,
+        prim: &gltf::Primitive,
+        world: &DMat4,
+        field: &str,
+        name: String,
+    ) -> Result<Option<GltfMesh>> {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.flags.skipped += 1;
+            return Ok(None);
+        }
+        self.flags.animated |= prim.morph_targets().len() > 0;
+        let positions = self.positions(prim, world, field)?;
+        let normals = match prim.get(&Semantic::Normals) {
+            Some(acc) => self.normals(&acc, world, positions.len(), field)?,
+            None => None,
+        };
+        let indices = self.indices(prim, positions.len(), field)?;
+        if mode == Mode::Triangles && indices.len() % 3 != 0 {
+            let used = if prim.indices().is_some() {
+                "indices"
+            } else {
+                "attributes.POSITION"
+            };
+            let message = format!("has {} vertices, not a multiple of 3", indices.len());
+            return self.fail(format!("{field}.{used}"), message);
+        }
+        let mut triangles = triangle_list(mode, &indices);
+        // A mirroring transform turns counter-clockwise into clockwise; swapping
+        // two vertices keeps the geometric normal on the side the file meant.
+        if DMat3::from_mat4(*world).determinant() < 0.0 {
+            triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        let base_color = self.base_color(&prim.material())?;
+        let mesh = Mesh {
+            positions,
+            normals,
+            indices: triangles,
+        };
+        Ok(Some(GltfMesh {
+            mesh,
+            base_color,
+            name,
+        }))
+    }
+
+    /// World-space positions, all finite.
+    fn positions(&self, prim: &gltf::Primitive, world: &DMat4, field: &str) -> Result<Vec<DVec3>> {
+        let field = format!("{field}.attributes.POSITION");
+        let Some(acc) = prim.get(&Semantic::Positions) else {
+            return self.fail(field, "is missing");
+        };
+        let raw = self.read_accessor(&acc, &field, Dimensions::Vec3, &[DataType::F32])?;
+        let mut positions = Vec::with_capacity(raw.len() / 3);
+        for (i, p) in raw.chunks_exact(3).enumerate() {
+            let p = world.transform_point3(DVec3::from_slice(p));
+            if !p.is_finite() {
+                let message = format!(
+                    "vertex {i} of accessors[{}] is not finite: {p}",
+                    acc.index()
+                );
+                return self.fail(field, message);
+            }
+            positions.push(p);
+        }
+        Ok(positions)
+    }
+
+    /// The vertex indices, each below `count`; `0..count` for a non-indexed primitive.
+    fn indices(&self, prim: &gltf::Primitive, count: usize, field: &str) -> Result<Vec<u32>> {
+        let Some(acc) = prim.indices() else {
+            let count = u32::try_from(count);
+            let message = "has more vertices than 32-bit indices can address";
+            return count
+                .map(|n| (0..n).collect())
+                .map_err(|_| self.err(field, message));
+        };
+        let field = format!("{field}.indices");
+        let types = [DataType::U8, DataType::U16, DataType::U32];
+        let ix = self.read_accessor(&acc, &field, Dimensions::Scalar, &types)?;
+        if let Some((k, v)) = ix.iter().enumerate().find(|(_, &v)| v >= count as f64) {
+            let message = format!(
+                "index {v} (entry {k} of accessors[{}]) is out of range for {count} vertices",
+                acc.index()
+            );
+            return self.fail(field, message);
+        }
+        // Exact: each is an integer below `count`.
+        Ok(ix.into_iter().map(|v| v as u32).collect())
+    }
+
+    /// The linear RGB of `baseColorFactor`; `None` for the default material.
+    fn base_color(&mut self, material: &gltf::Material) -> Result<Option<Vec3>> {
+        let Some(m) = material.index() else {
+            return Ok(None);
+        };
+        let pbr = material.pbr_metallic_roughness();
+        self.flags.textured |= pbr.base_color_texture().is_some();
+        let [r, g, b, _alpha] = pbr.base_color_factor();
+        let c = Vec3::new(r, g, b);
+        if !c.is_finite() || c.min_element() < 0.0 {
+            let field = format!("materials[{m}].pbrMetallicRoughness.baseColorFactor");
+            return self.fail(field, format!("must be finite and non-negative, got {c}"));
+        }
+        Ok(Some(c))
+    }
+
+    /// World-space unit normals, transformed by the inverse transpose so that
+    /// they stay perpendicular to the surface under non-uniform scale.
+    fn normals(
+        &self,
+        acc: &Accessor,
+        world: &DMat4,
+        count: usize,
+        field: &str,
+    ) -> Result<Option<Vec<DVec3>>> {
+        let field = format!("{field}.attributes.NORMAL");
+        let raw = self.read_accessor(acc, &field, Dimensions::Vec3, &[DataType::F32])?;
+        if raw.len() != count * 3 {
+            return self.fail(
+                field,
+                format!("has {} normals for {count} vertices", raw.len() / 3),
+            );
+        }
+        let linear = DMat3::from_mat4(*world);
+        if linear.determinant() == 0.0 {
+            // A node scaled to nothing (a common way to hide one) leaves only
+            // degenerate triangles, which no ray hits: no normals to shade.
+            return Ok(None);
+        }
+        let m = linear.inverse().transpose();
+        let mut normals = Vec::with_capacity(count);
+        for (i, n) in raw.chunks_exact(3).enumerate() {
+            let n = (m * DVec3::from_slice(n)).normalize_or_zero();
+            if n == DVec3::ZERO {
+                let message = format!(
+                    "normal {i} of accessors[{}] is zero or not finite after the node transform",
+                    acc.index()
+                );
+                return self.fail(field, message);
+            }
+            normals.push(n);
+        }
+        Ok(Some(normals))
+    }
+
+    /// An accessor of the expected shape as `count × components` numbers, with
+    /// sparse substitution applied; `field` is where the file uses it.
+    fn read_accessor(
+        &self,
+        acc: &Accessor,
+        field: &str,
+        dims: Dimensions,
+        types: &[DataType],
+    ) -> Result<Vec<f64>> {
+        let name = format!("accessors[{}]", acc.index());
+        let (ty, n, count) = (
+            acc.data_type(),
+            acc.dimensions().multiplicity(),
+            acc.count(),
+        );
+        if acc.dimensions() != dims || !types.contains(&ty) {
+            let message = format!(
+                "{name} is {ty:?} {:?}, expected {types:?} {dims:?}",
+                acc.dimensions()
+            );
+            return self.fail(field, message);
+        }
+        let layout = (n, ty);
+        let mut values = match acc.view() {
+            Some(view) => self.read_view(&view, acc.offset(), count, layout, &name)?,
+            // Sparse only, starting from zeros. No buffer bounds the count here.
+            None if count <= 1 << 24 => vec![0.0; count * n],
+            None => return self.fail(format!("{name}.count"), "is too large without a bufferView"),
+        };
+        if let Some(sparse) = acc.sparse() {
+            let (idx, vals, k) = (sparse.indices(), sparse.values(), sparse.count());
+            let itype = match idx.index_type() {
+                IndexType::U8 => DataType::U8,
+                IndexType::U16 => DataType::U16,
+                IndexType::U32 => DataType::U32,
+            };
+            let ifield = format!("{name}.sparse.indices");
+            let at = self.read_view(&idx.view(), idx.offset(), k, (1, itype), &ifield)?;
+            let vfield = format!("{name}.sparse.values");
+            let subst = self.read_view(&vals.view(), vals.offset(), k, layout, &vfield)?;
+            for (&i, value) in at.iter().zip(subst.chunks_exact(n)) {
+                let i = i as usize;
+                let Some(slot) = values.get_mut(i * n..(i + 1) * n) else {
+                    return self.fail(
+                        ifield,
+                        format!("index {i} is out of range for {count} elements"),
+                    );
+                };
+                slot.copy_from_slice(value);
+            }
+        }
+        Ok(values)
+    }
+
+    /// `count` elements of `n` components of type `ty` from a buffer view,
+    /// after checking that they lie inside it; `field` names the accessor.
+    fn read_view(
+        &self,
+        view: &View,
+        offset: usize,
+        count: usize,
+        (n, ty): (usize, DataType),
+        field: &str,
+    ) -> Result<Vec<f64>> {
+        let buffer = &self.buffers[view.buffer().index()];
+        let end = view.offset().checked_add(view.length());
+        let Some(bytes) = end.and_then(|end| buffer.get(view.offset()..end)) else {
+            let message = format!(
+                "exceeds buffer {} ({} bytes)",
+                view.buffer().index(),
+                buffer.len()
+            );
+            return self.fail(format!("bufferViews[{}]", view.index()), message);
+        };
+        let (size, elem) = (ty.size(), ty.size() * n);
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            let message = format!(
+                "bufferViews[{}] has byteStride {stride} < {elem}",
+                view.index()
+            );
+            return self.fail(field, message);
+        }
+        let end = match count {
+            0 => Some(0),
+            _ => (count - 1)
+                .checked_mul(stride)
+                .and_then(|x| x.checked_add(offset)?.checked_add(elem)),
+        };
+        if !matches!(end, Some(end) if end <= bytes.len()) {
+            let message = format!(
+                "{count} elements of {elem} bytes from offset {offset} (stride {stride}) \
+                 do not fit bufferViews[{}] ({} bytes)",
+                view.index(),
+                bytes.len()
+            );
+            return self.fail(field, message);
+        }
+        let mut out = Vec::with_capacity(count * n);
+        for i in 0..count {
+            for c in 0..n {
+                let at = offset + i * stride + c * size;
+                out.push(component(&bytes[at..at + size], ty));
+            }
+        }
+        Ok(out)
+    }
+
+    fn camera(&self, camera: &gltf::Camera, world: &DMat4, node: usize) -> Result<GltfCamera> {
+        let f = |k: &str| format!("cameras[{}].{k}", camera.index());
+        let (projection, aspect_ratio) = match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => {
+                let yfov = f64::from(p.yfov());
+                if !(yfov > 0.0 && yfov < PI) {
+                    return self.fail(
+                        f("perspective.yfov"),
+                        format!("must be in (0, pi), got {yfov}"),
+                    );
+                }
+                let aspect = p.aspect_ratio().map(f64::from);
+                if aspect.is_some_and(|a| !(a > 0.0 && a.is_finite())) {
+                    return self.fail(f("perspective.aspectRatio"), "must be positive");
+                }
+                (
+                    Projection::Perspective {
+                        vfov_deg: yfov.to_degrees(),
+                    },
+                    aspect,
+                )
+            }
+            gltf::camera::Projection::Orthographic(o) => {
+                let ymag = f64::from(o.ymag());
+                if !(ymag > 0.0 && ymag.is_finite()) {
+                    return self.fail(
+                        f("orthographic.ymag"),
+                        format!("must be positive, got {ymag}"),
+                    );
+                }
+                (Projection::Orthographic { half_height: ymag }, None)
+            }
+        };
+        let Some(orientation) = rotation_of(world) else {
+            return self.fail(
+                format!("nodes[{node}]"),
+                "the camera's transform is singular",
+            );
+        };
+        let position = world.w_axis.truncate();
+        Ok(GltfCamera {
+            position,
+            orientation,
+            projection,
+            aspect_ratio,
+        })
+    }
+
+    fn light(
+        &mut self,
+        light: &gltf::khr_lights_punctual::Light,
+        world: &DMat4,
+        node: usize,
+    ) -> Result<Light> {
+        let f = |k: &str| {
+            format!(
+                "extensions.KHR_lights_punctual.lights[{}].{k}",
+                light.index()
+            )
+        };
+        let colour = Vec3::from_array(light.color());
+        if !colour.is_finite() || colour.min_element() < 0.0 {
+            return self.fail(
+                f("color"),
+                format!("must be finite and non-negative, got {colour}"),
+            );
+        }
+        let intensity = light.intensity();
+        if !(intensity >= 0.0 && intensity.is_finite()) {
+            return self.fail(
+                f("intensity"),
+                format!("must be finite and >= 0, got {intensity}"),
+            );
+        }
+        self.flags.ranged |= light.range().is_some();
+        let position = world.w_axis.truncate();
+        // Directional and spot lights shine along the node's −Z.
+        let direction = || {
+            let d = (-world.z_axis.truncate()).try_normalize();
+            d.ok_or_else(|| {
+                self.err(
+                    format!("nodes[{node}]"),
+                    "the light's transform collapses −Z",
+                )
+            })
+        };
+        let kind = match light.kind() {
+            Kind::Directional => LightKind::Directional {
+                direction: direction()?,
+            },
+            Kind::Point => LightKind::Point { position },
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => {
+                let inner = f64::from(inner_cone_angle);
+                // π/2 written in the file rounds up when read as f32; accept it.
+                let outer = match f64::from(outer_cone_angle) {
+                    o if o > FRAC_PI_2 && o <= FRAC_PI_2 + 1e-6 => FRAC_PI_2,
+                    o => o,
+                };
+                if !(outer > 0.0 && outer <= FRAC_PI_2) {
+                    let message = format!("must be in (0, pi/2], got {outer}");
+                    return self.fail(f("spot.outerConeAngle"), message);
+                }
+                if !(inner >= 0.0 && inner < outer) {
+                    let message =
+                        format!("must be >= 0 and below outerConeAngle {outer}, got {inner}");
+                    return self.fail(f("spot.innerConeAngle"), message);
+                }
+                LightKind::Spot {
+                    position,
+                    direction: direction()?,
+                    inner_angle: inner,
+                    outer_angle: outer,
+                }
+            }
+        };
+        Ok(Light {
+            kind,
+            intensity,
+            ambient: Vec3::ZERO,
+            diffuse: colour,
+            specular: colour,
+        })
+    }
+}
+
+/// The rotation of a camera node: keeps its view axis, makes up perpendicular
+/// to it and drops scale and shear; `None` if the transform collapses an axis.
+fn rotation_of(m: &DMat4) -> Option<DMat3> {
+    let back = m.z_axis.truncate().try_normalize()?;
+    let y = m.y_axis.truncate();
+    let up = (y - back * back.dot(y)).try_normalize()?;
+    Some(DMat3::from_cols(up.cross(back), up, back))
+}
+
+/// Triangles in the glTF specification's vertex order: strips alternate the
+/// order so that every triangle faces the same way; fans pivot on vertex 0.
+fn triangle_list(mode: Mode, ix: &[u32]) -> Vec<[u32; 3]> {
+    let n = ix.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => (0..n)
+            .map(|i| [ix[i], ix[i + 1 + i % 2], ix[i + 2 - i % 2]])
+            .collect(),
+        Mode::TriangleFan => (0..n).map(|i| [ix[i + 1], ix[i + 2], ix[0]]).collect(),
+        _ => ix.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    }
+}
+
+/// One little-endian component; `b` holds exactly `ty.size()` bytes.
+fn component(b: &[u8], ty: DataType) -> f64 {
+    match ty {
+        DataType::I8 => f64::from(b[0] as i8),
+        DataType::U8 => f64::from(b[0]),
+        DataType::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+        DataType::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+        DataType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        DataType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+    }
+}
+
+/// Standard or URL-safe base64, padding optional; `None` on any other character.
+fn decode_base64(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(text.len() / 4 * 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for c in text.trim_end_matches('=').bytes() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        };
+        acc = (acc << 6 | u32::from(v)) & 0xFFFF;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+        }
+    }
+    Some(out)
+}
+
+/// Decodes the `%XX` escapes of a relative URI; `None` if malformed or not UTF-8.
+fn percent_decode(uri: &str) -> Option<String> {
+    let mut out = Vec::with_capacity(uri.len());
+    let mut bytes = uri.bytes();
+    while let Some(b) = bytes.next() {
+        if b == b'%' {
+            let hex = [bytes.next()?, bytes.next()?];
+            out.push(u8::from_str_radix(std::str::from_utf8(&hex).ok()?, 16).ok()?);
+        } else {
+            out.push(b);
+        }
+    }
+    String::from_utf8(out).ok()
+}

@@ -148,13 +148,26 @@ struct LightFile {
 
 /// Checks that exactly the fields a kind needs are present: `fields` lists
 /// (name, present, needed-by-this-kind).
-fn fields_for(file: &Path, at: &str, kind: &str, fields: &[(&str, bool, bool)]) -> Result<(), SceneError> {
+fn fields_for(
+    file: &Path,
+    at: &str,
+    kind: &str,
+    fields: &[(&str, bool, bool)],
+) -> Result<(), SceneError> {
     for &(name, present, needed) in fields {
         if needed && !present {
-            return Err(SceneError::new(file, at, format!("missing field `{name}` (required for {kind})")));
+            return Err(SceneError::new(
+                file,
+                at,
+                format!("missing field `{name}` (required for {kind})"),
+            ));
         }
         if present && !needed {
-            return Err(SceneError::new(file, format!("{at}.{name}"), format!("not a field of {kind}")));
+            return Err(SceneError::new(
+                file,
+                format!("{at}.{name}"),
+                format!("not a field of {kind}"),
+            ));
         }
     }
     Ok(())
@@ -199,7 +212,10 @@ impl Reader<'_> {
         let euler = c.yaw.is_some() || c.pitch.is_some() || c.roll.is_some();
         let orientation = match (c.look_at, euler) {
             (Some(_), true) => {
-                return Err(self.err("camera", "give either `look_at` (with `up`) or `yaw`/`pitch`/`roll`, not both"))
+                return Err(self.err(
+                    "camera",
+                    "give either `look_at` (with `up`) or `yaw`/`pitch`/`roll`, not both",
+                ))
             }
             (Some(target), false) => {
                 let target = self.finite("camera.look_at", target)?;
@@ -208,10 +224,13 @@ impl Reader<'_> {
                     crate::scene::camera::OrientationError::ZeroViewDirection => {
                         self.err("camera.look_at", "must differ from camera.position")
                     }
-                    crate::scene::camera::OrientationError::ZeroUp => self.err("camera.up", "must be a non-zero vector"),
-                    crate::scene::camera::OrientationError::UpParallelToView => {
-                        self.err("camera.up", "is parallel to the view direction (look_at - position)")
+                    crate::scene::camera::OrientationError::ZeroUp => {
+                        self.err("camera.up", "must be a non-zero vector")
                     }
+                    crate::scene::camera::OrientationError::UpParallelToView => self.err(
+                        "camera.up",
+                        "is parallel to the view direction (look_at - position)",
+                    ),
                 })?
             }
             (None, _) => {
@@ -219,7 +238,10 @@ impl Reader<'_> {
                     return Err(self.err("camera.up", "only used with `look_at`"));
                 }
                 let mut angles = [0.0; 3];
-                for (k, (name, v)) in [("yaw", c.yaw), ("pitch", c.pitch), ("roll", c.roll)].into_iter().enumerate() {
+                for (k, (name, v)) in [("yaw", c.yaw), ("pitch", c.pitch), ("roll", c.roll)]
+                    .into_iter()
+                    .enumerate()
+                {
                     let v = v.unwrap_or(0.0);
                     if !v.is_finite() {
                         return Err(self.err(format!("camera.{name}"), "must be finite"));
@@ -232,40 +254,74 @@ impl Reader<'_> {
         let projection = match c.projection {
             ProjectionKind::Perspective => {
                 if c.half_height.is_some() {
-                    return Err(self.err("camera.half_height", "only used with \"projection\": \"orthographic\""));
+                    return Err(self.err(
+                        "camera.half_height",
+                        "only used with \"projection\": \"orthographic\"",
+                    ));
                 }
                 let fov = c.fov.unwrap_or(45.0);
                 if !(fov > 0.0 && fov < 180.0) {
-                    return Err(self.err("camera.fov", format!("must be in (0, 180) degrees, got {fov}")));
+                    return Err(self.err(
+                        "camera.fov",
+                        format!("must be in (0, 180) degrees, got {fov}"),
+                    ));
                 }
                 Projection::Perspective { vfov_deg: fov }
             }
             ProjectionKind::Orthographic => {
                 if c.fov.is_some() {
-                    return Err(self.err("camera.fov", "only used with \"projection\": \"perspective\""));
+                    return Err(self.err(
+                        "camera.fov",
+                        "only used with \"projection\": \"perspective\"",
+                    ));
                 }
-                let h = c
-                    .half_height
-                    .ok_or_else(|| self.err("camera", "missing field `half_height` (required for an orthographic camera)"))?;
+                let h = c.half_height.ok_or_else(|| {
+                    self.err(
+                        "camera",
+                        "missing field `half_height` (required for an orthographic camera)",
+                    )
+                })?;
                 if !(h > 0.0 && h.is_finite()) {
-                    return Err(self.err("camera.half_height", format!("must be positive, got {h}")));
+                    return Err(
+                        self.err("camera.half_height", format!("must be positive, got {h}"))
+                    );
                 }
                 Projection::Orthographic { half_height: h }
             }
         };
         let (width, height) = super::override_size(opts, c.width, c.height);
         let max = crate::scene::MAX_IMAGE_SIDE;
-        for (name, v, cli) in [("camera.width", width, opts.width.is_some()), ("camera.height", height, opts.height.is_some())] {
+        for (name, v, cli) in [
+            ("camera.width", width, opts.width.is_some()),
+            ("camera.height", height, opts.height.is_some()),
+        ] {
             if v == 0 || v > max {
-                let field = if cli { name.replace("camera.", "--") } else { name.to_string() };
+                let field = if cli {
+                    name.replace("camera.", "--")
+                } else {
+                    name.to_string()
+                };
                 return Err(self.err(field, format!("must be in 1..={max} pixels, got {v}")));
             }
         }
-        Ok(Camera { position, orientation, projection, width, height })
+        Ok(Camera {
+            position,
+            orientation,
+            projection,
+            width,
+            height,
+        })
     }
 
-    fn shaders(&self, files: &BTreeMap<String, ShaderFile>) -> Result<(Vec<Shader>, BTreeMap<String, ShaderId>), SceneError> {
-        let ids: BTreeMap<String, ShaderId> = files.keys().enumerate().map(|(i, k)| (k.clone(), i)).collect();
+    fn shaders(
+        &self,
+        files: &BTreeMap<String, ShaderFile>,
+    ) -> Result<(Vec<Shader>, BTreeMap<String, ShaderId>), SceneError> {
+        let ids: BTreeMap<String, ShaderId> = files
+            .keys()
+            .enumerate()
+            .map(|(i, k)| (k.clone(), i))
+            .collect();
         let mut shaders = Vec::new();
         for (name, s) in files {
             let at = format!("shaders.{name}");
@@ -276,13 +332,22 @@ impl Reader<'_> {
                 ShaderKind::BlinnPhong => "a blinn_phong shader",
                 ShaderKind::Checker => "a checker shader",
             };
-            fields_for(self.file, &at, kind, &[
-                ("diffuse", s.diffuse.is_some(), phong),
-                ("size", s.size.is_some(), !phong),
-                ("even", s.even.is_some(), !phong),
-                ("odd", s.odd.is_some(), !phong),
-            ])?;
-            for (k, present) in [("ambient", s.ambient.is_some()), ("specular", s.specular.is_some()), ("shininess", s.shininess.is_some())] {
+            fields_for(
+                self.file,
+                &at,
+                kind,
+                &[
+                    ("diffuse", s.diffuse.is_some(), phong),
+                    ("size", s.size.is_some(), !phong),
+                    ("even", s.even.is_some(), !phong),
+                    ("odd", s.odd.is_some(), !phong),
+                ],
+            )?;
+            for (k, present) in [
+                ("ambient", s.ambient.is_some()),
+                ("specular", s.specular.is_some()),
+                ("shininess", s.shininess.is_some()),
+            ] {
                 if present && !phong {
                     return Err(self.err(f(k), format!("not a field of {kind}")));
                 }
@@ -290,7 +355,10 @@ impl Reader<'_> {
             shaders.push(if phong {
                 let shininess = s.shininess.unwrap_or(1.0);
                 if !(shininess >= 0.0 && shininess.is_finite()) {
-                    return Err(self.err(f("shininess"), format!("must be finite and >= 0, got {shininess}")));
+                    return Err(self.err(
+                        f("shininess"),
+                        format!("must be finite and >= 0, got {shininess}"),
+                    ));
                 }
                 let p = Phong {
                     ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
@@ -310,10 +378,37 @@ impl Reader<'_> {
                 }
                 let sub = |k: &str, v: &Option<String>| {
                     let v = v.as_deref().unwrap_or_default();
-                    ids.get(v).copied().ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
+                    ids.get(v)
+                        .copied()
+                        .ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
                 };
-                Shader::Checker(Checker { size, even: sub("even", &s.even)?, odd: sub("odd", &s.odd)? })
+                Shader::Checker(Checker {
+                    size,
+                    even: sub("even", &s.even)?,
+                    odd: sub("odd", &s.odd)?,
+                })
             });
+        }
+        // Checkers nest, but a cycle never resolves. Scene::validate rejects
+        // one too, by index; here the error names the shader as the file does.
+        let children = |i: ShaderId| match &shaders[i] {
+            Shader::Checker(c) => vec![c.even, c.odd],
+            _ => Vec::new(),
+        };
+        for (name, &start) in &ids {
+            let mut seen = vec![false; shaders.len()];
+            let mut todo = children(start);
+            while let Some(i) = todo.pop() {
+                if i == start {
+                    return Err(self.err(
+                        format!("shaders.{name}"),
+                        "checker shaders refer to each other in a cycle",
+                    ));
+                }
+                if !std::mem::replace(&mut seen[i], true) {
+                    todo.extend(children(i));
+                }
+            }
         }
         Ok((shaders, ids))
     }
@@ -326,24 +421,38 @@ impl Reader<'_> {
             LightType::Point => ("a point light", true, false, false),
             LightType::Spot => ("a spot light", true, true, true),
         };
-        fields_for(self.file, &at, kind_name, &[
-            ("position", l.position.is_some(), needs_pos),
-            ("direction", l.direction.is_some(), needs_dir),
-            ("inner_angle", l.inner_angle.is_some(), spot),
-            ("outer_angle", l.outer_angle.is_some(), spot),
-        ])?;
+        fields_for(
+            self.file,
+            &at,
+            kind_name,
+            &[
+                ("position", l.position.is_some(), needs_pos),
+                ("direction", l.direction.is_some(), needs_dir),
+                ("inner_angle", l.inner_angle.is_some(), spot),
+                ("outer_angle", l.outer_angle.is_some(), spot),
+            ],
+        )?;
         let pos = || self.finite(&f("position"), l.position.unwrap_or_default());
         let dir = || self.direction(&f("direction"), l.direction.unwrap_or_default());
         let kind = match l.kind {
             LightType::Directional => LightKind::Directional { direction: dir()? },
             LightType::Point => LightKind::Point { position: pos()? },
             LightType::Spot => {
-                let (inner, outer) = (l.inner_angle.unwrap_or_default(), l.outer_angle.unwrap_or_default());
+                let (inner, outer) = (
+                    l.inner_angle.unwrap_or_default(),
+                    l.outer_angle.unwrap_or_default(),
+                );
                 if !(outer > 0.0 && outer <= 90.0) {
-                    return Err(self.err(f("outer_angle"), format!("must be in (0, 90] degrees, got {outer}")));
+                    return Err(self.err(
+                        f("outer_angle"),
+                        format!("must be in (0, 90] degrees, got {outer}"),
+                    ));
                 }
                 if !(inner >= 0.0 && inner < outer) {
-                    return Err(self.err(f("inner_angle"), format!("must be in [0, outer_angle) degrees, got {inner}")));
+                    return Err(self.err(
+                        f("inner_angle"),
+                        format!("must be in [0, outer_angle) degrees, got {inner}"),
+                    ));
                 }
                 LightKind::Spot {
                     position: pos()?,
@@ -355,7 +464,10 @@ impl Reader<'_> {
         };
         let intensity = l.intensity.unwrap_or(1.0);
         if !(intensity >= 0.0 && intensity.is_finite()) {
-            return Err(self.err(f("intensity"), format!("must be finite and >= 0, got {intensity}")));
+            return Err(self.err(
+                f("intensity"),
+                format!("must be finite and >= 0, got {intensity}"),
+            ));
         }
         Ok(Light {
             kind,
@@ -375,22 +487,32 @@ impl Reader<'_> {
             Some(Scale::PerAxis(s)) => DVec3::from_array(s),
         };
         if !scale.is_finite() || scale.min_element() <= 0.0 {
-            return Err(self.err(format!("{at}.scale"), format!("must be finite and positive, got {scale}")));
+            return Err(self.err(
+                format!("{at}.scale"),
+                format!("must be finite and positive, got {scale}"),
+            ));
         }
-        let rot = DMat3::from_rotation_z(r.z.to_radians()) * DMat3::from_rotation_y(r.y.to_radians()) * DMat3::from_rotation_x(r.x.to_radians());
+        let rot = DMat3::from_rotation_z(r.z.to_radians())
+            * DMat3::from_rotation_y(r.y.to_radians())
+            * DMat3::from_rotation_x(r.x.to_radians());
         Ok(DMat4::from_translation(translate) * DMat4::from_mat3(rot) * DMat4::from_scale(scale))
     }
 }
 
 /// Reads a JSON scene file.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::new(path, "", format!("cannot read scene: {e}")))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(path, "", format!("cannot read scene: {e}")))?;
     let de = &mut serde_json::Deserializer::from_str(&text);
     let file: SceneFile = serde_path_to_error::deserialize(de).map_err(|e| {
         let field = e.path().to_string();
         let inner = e.into_inner();
         // serde_json appends " at line L column C"; keep it, it helps.
-        SceneError::new(path, if field == "." { String::new() } else { field }, inner.to_string())
+        SceneError::new(
+            path,
+            if field == "." { String::new() } else { field },
+            inner.to_string(),
+        )
     })?;
     let r = Reader { file: path };
     let camera = r.camera(&file.camera, opts)?;
@@ -410,17 +532,29 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
             ObjectKind::Triangle => ("a triangle", [false, false, false, false, true, false]),
             ObjectKind::Mesh => ("a mesh", [false, false, false, false, false, true]),
         };
-        fields_for(path, &at, kind, &[
-            ("point", o.point.is_some(), needs[0]),
-            ("normal", o.normal.is_some(), needs[1]),
-            ("center", o.center.is_some(), needs[2]),
-            ("radius", o.radius.is_some(), needs[3]),
-            ("vertices", o.vertices.is_some(), needs[4]),
-            ("file", o.file.is_some(), needs[5]),
-            ("transform", o.transform.is_some(), o.kind == ObjectKind::Mesh && o.transform.is_some()),
-        ])?;
+        fields_for(
+            path,
+            &at,
+            kind,
+            &[
+                ("point", o.point.is_some(), needs[0]),
+                ("normal", o.normal.is_some(), needs[1]),
+                ("center", o.center.is_some(), needs[2]),
+                ("radius", o.radius.is_some(), needs[3]),
+                ("vertices", o.vertices.is_some(), needs[4]),
+                ("file", o.file.is_some(), needs[5]),
+                (
+                    "transform",
+                    o.transform.is_some(),
+                    o.kind == ObjectKind::Mesh && o.transform.is_some(),
+                ),
+            ],
+        )?;
         let shader = match &o.shader {
-            Some(name) => Some(*ids.get(name).ok_or_else(|| r.err(f("shader"), format!("no shader named \"{name}\"")))?),
+            Some(name) => Some(
+                *ids.get(name)
+                    .ok_or_else(|| r.err(f("shader"), format!("no shader named \"{name}\"")))?,
+            ),
             None if o.kind == ObjectKind::Mesh => None,
             None => return Err(r.err(&at, format!("missing field `shader` (required for {kind})"))),
         };
@@ -434,7 +568,10 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
                 if !(radius > 0.0 && radius.is_finite()) {
                     return Err(r.err(f("radius"), format!("must be positive, got {radius}")));
                 }
-                Shape::Sphere(Sphere { center: r.finite(&f("center"), o.center.unwrap_or_default())?, radius })
+                Shape::Sphere(Sphere {
+                    center: r.finite(&f("center"), o.center.unwrap_or_default())?,
+                    radius,
+                })
             }
             ObjectKind::Triangle => {
                 let v = o.vertices.unwrap_or_default();
@@ -450,7 +587,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
                 if !mesh_path.is_file() {
                     return Err(r.err(f("file"), format!("no such file: {}", mesh_path.display())));
                 }
-                let m = o.transform.as_ref().map(|t| r.transform(&f("transform"), t)).transpose()?.unwrap_or(DMat4::IDENTITY);
+                let m = o
+                    .transform
+                    .as_ref()
+                    .map(|t| r.transform(&f("transform"), t))
+                    .transpose()?
+                    .unwrap_or(DMat4::IDENTITY);
                 let doc = super::gltf::read(&mesh_path)?;
                 notes.extend(doc.notes);
                 files.extend(doc.files);
@@ -460,7 +602,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
                         Some(s) => s,
                         None => {
                             let kd = gm.base_color.unwrap_or(Vec3::ONE);
-                            shaders.push(Shader::Phong(Phong { ambient: Vec3::ZERO, diffuse: kd, specular: Vec3::ZERO, shininess: 1.0 }));
+                            shaders.push(Shader::Phong(Phong {
+                                ambient: Vec3::ZERO,
+                                diffuse: kd,
+                                specular: Vec3::ZERO,
+                                shininess: 1.0,
+                            }));
                             shaders.len() - 1
                         }
                     };
@@ -473,13 +620,34 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
                             *n = (normal_m * *n).normalize_or_zero();
                         }
                     }
-                    objects.push(Object { shape: Shape::Mesh(mesh), shader });
+                    objects.push(Object {
+                        shape: Shape::Mesh(mesh),
+                        shader,
+                    });
                 }
                 continue;
             }
         };
-        objects.push(Object { shape, shader: shader.unwrap_or_default() });
+        objects.push(Object {
+            shape,
+            shader: shader.unwrap_or_default(),
+        });
     }
-    let lights = file.lights.iter().enumerate().map(|(i, l)| r.light(i, l)).collect::<Result<Vec<_>, _>>()?;
-    Ok(Loaded { scene: Scene { camera, background, shaders, objects, lights }, notes, files })
+    let lights = file
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| r.light(i, l))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Loaded {
+        scene: Scene {
+            camera,
+            background,
+            shaders,
+            objects,
+            lights,
+        },
+        notes,
+        files,
+    })
 }

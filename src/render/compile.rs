@@ -132,7 +132,10 @@ impl Assembled {
 
     fn error_at(&self, loc: Option<naga::SourceLocation>, message: String) -> CompileError {
         let Some(loc) = loc else {
-            return CompileError { location: "shaders".into(), message };
+            return CompileError {
+                location: "shaders".into(),
+                message,
+            };
         };
         let src_line = self
             .text
@@ -171,14 +174,21 @@ impl Assembled {
             Some((naga::ShaderStage::Compute, ENTRY_POINT)),
             &constants,
         )
-        .map_err(|e| CompileError { location: "shaders".into(), message: e.to_string() })?;
+        .map_err(|e| CompileError {
+            location: "shaders".into(),
+            message: e.to_string(),
+        })?;
         let options = spirv_options();
         let pipeline = naga::back::spv::PipelineOptions {
             shader_stage: naga::ShaderStage::Compute,
             entry_point: ENTRY_POINT.to_string(),
         };
-        naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
-            .map_err(|e| CompileError { location: "shaders".into(), message: e.to_string() })
+        naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).map_err(|e| {
+            CompileError {
+                location: "shaders".into(),
+                message: e.to_string(),
+            }
+        })
     }
 }
 
@@ -254,7 +264,12 @@ mod tests {
         let src = ShaderSource::Embedded.assemble().unwrap();
         for (name, start, count) in &src.files {
             let rel = name.trim_start_matches("shaders/");
-            let body: Vec<&str> = src.text.lines().skip(*start as usize - 1).take(*count as usize).collect();
+            let body: Vec<&str> = src
+                .text
+                .lines()
+                .skip(*start as usize - 1)
+                .take(*count as usize)
+                .collect();
             let mut body = body.join("\n");
             if rel == "lights.wgsl" {
                 body = body.replacen("let dist = sqrt(dist2);", "let dist = sqrt(dist2) +;", 1);
@@ -263,7 +278,9 @@ mod tests {
             std::fs::create_dir_all(path.parent().unwrap()).unwrap();
             std::fs::write(path, body).unwrap();
         }
-        let broken = ShaderSource::Directory(dir.path().to_path_buf()).assemble().unwrap();
+        let broken = ShaderSource::Directory(dir.path().to_path_buf())
+            .assemble()
+            .unwrap();
         let err = broken.compile(&Features::default()).unwrap_err();
         let want_line = include_str!("../../shaders/lights.wgsl")
             .lines()
@@ -272,6 +289,9 @@ mod tests {
             + 1;
         assert!(err.location.contains("lights.wgsl"), "{err}");
         assert!(err.location.contains(&format!(":{want_line}:")), "{err}");
-        assert!(err.message.contains("sqrt(dist2) +;") && err.message.contains('^'), "{err}");
+        assert!(
+            err.message.contains("sqrt(dist2) +;") && err.message.contains('^'),
+            "{err}"
+        );
     }
 }

@@ -187,7 +187,11 @@ impl GpuScene {
             let push_triangle = |v: [DVec3; 3], normals: Option<[DVec3; 3]>, g: &mut GpuScene| {
                 let normals = match normals {
                     Some([a, b, c]) => {
-                        g.vertex_normals.push(VertexNormals { n0: n4(a), n1: n4(b), n2: n4(c) });
+                        g.vertex_normals.push(VertexNormals {
+                            n0: n4(a),
+                            n1: n4(b),
+                            n2: n4(c),
+                        });
                         g.vertex_normals.len() as u32 - 1
                     }
                     None => NO_NORMALS,
@@ -242,7 +246,12 @@ impl GpuScene {
                     gl.kind = LIGHT_POINT;
                     gl.position = f3(position - eye);
                 }
-                LightKind::Spot { position, direction, inner_angle, outer_angle } => {
+                LightKind::Spot {
+                    position,
+                    direction,
+                    inner_angle,
+                    outer_angle,
+                } => {
                     // KHR_lights_punctual: attenuation = clamp(cos·scale + offset)².
                     let (ci, co) = (inner_angle.cos(), outer_angle.cos());
                     let s = 1.0 / (ci - co).max(1e-3);
@@ -258,7 +267,11 @@ impl GpuScene {
         for sh in &scene.shaders {
             g.shaders.push(match sh {
                 Shader::Phong(p) | Shader::BlinnPhong(p) => ShaderNode {
-                    kind: if matches!(sh, Shader::Phong(_)) { SHADER_PHONG } else { SHADER_BLINN_PHONG },
+                    kind: if matches!(sh, Shader::Phong(_)) {
+                        SHADER_PHONG
+                    } else {
+                        SHADER_BLINN_PHONG
+                    },
                     ambient: c3(p.ambient),
                     diffuse: c3(p.diffuse),
                     specular: c3(p.specular),
@@ -307,29 +320,80 @@ mod tests {
     use super::*;
     use std::mem::{offset_of, size_of};
 
-    /// Every mirrored struct: its WGSL name, Rust size, and (member, offset).
-    fn host_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+    /// A mirrored struct: its WGSL name, Rust size, and (member, offset).
+    type HostLayout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+    fn host_layouts() -> Vec<HostLayout> {
         macro_rules! layout {
             ($wgsl:literal, $t:ty, [$($f:ident),*]) => {
                 ($wgsl, size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f))),*])
             };
         }
         vec![
-            layout!("Camera", Camera, [right, width, up, height, forward, orthographic]),
-            layout!("Globals", Globals, [camera, background, num_planes, num_spheres, num_triangles, num_lights, num_shaders]),
+            layout!(
+                "Camera",
+                Camera,
+                [right, width, up, height, forward, orthographic]
+            ),
+            layout!(
+                "Globals",
+                Globals,
+                [
+                    camera,
+                    background,
+                    num_planes,
+                    num_spheres,
+                    num_triangles,
+                    num_lights,
+                    num_shaders
+                ]
+            ),
             layout!("PushConstants", PushConstants, [origin, flags, _pad]),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
             layout!("Triangle", Triangle, [v0, shader, e1, object, e2, normals]),
             layout!("VertexNormals", VertexNormals, [n0, n1, n2]),
-            layout!("Light", Light, [position, kind, direction, cone_scale, ambient, cone_offset, diffuse, _pad0, specular, _pad1]),
-            layout!("ShaderNode", ShaderNode, [ambient, kind, diffuse, shininess, specular, inv_size, cell_offset, parity, even, odd, _pad]),
+            layout!(
+                "Light",
+                Light,
+                [
+                    position,
+                    kind,
+                    direction,
+                    cone_scale,
+                    ambient,
+                    cone_offset,
+                    diffuse,
+                    _pad0,
+                    specular,
+                    _pad1
+                ]
+            ),
+            layout!(
+                "ShaderNode",
+                ShaderNode,
+                [
+                    ambient,
+                    kind,
+                    diffuse,
+                    shininess,
+                    specular,
+                    inv_size,
+                    cell_offset,
+                    parity,
+                    even,
+                    odd,
+                    _pad
+                ]
+            ),
         ]
     }
 
     #[test]
     fn host_structs_match_wgsl_layout() {
-        let source = crate::render::compile::ShaderSource::Embedded.assemble().unwrap();
+        let source = crate::render::compile::ShaderSource::Embedded
+            .assemble()
+            .unwrap();
         let module = naga::front::wgsl::parse_str(&source.text).unwrap();
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
@@ -344,7 +408,10 @@ mod tests {
             };
             // Arrays of these structs stride by the WGSL size, rounded to alignment.
             assert_eq!(*span as usize, size, "{name}: size");
-            assert_eq!(layouter[handle].size as usize, size, "{name}: layouter size");
+            assert_eq!(
+                layouter[handle].size as usize, size,
+                "{name}: layouter size"
+            );
             let wgsl: Vec<(&str, usize)> = members
                 .iter()
                 .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
@@ -356,8 +423,15 @@ mod tests {
     #[test]
     fn checker_offset_keeps_parity_far_away() {
         use crate::scene::Checker;
-        let c = Checker { size: 0.5, even: 0, odd: 1 };
-        for eye in [DVec3::new(1e7 + 0.3, -2.2e5, 3.7), DVec3::new(-0.1, 0.2, 0.3)] {
+        let c = Checker {
+            size: 0.5,
+            even: 0,
+            odd: 1,
+        };
+        for eye in [
+            DVec3::new(1e7 + 0.3, -2.2e5, 3.7),
+            DVec3::new(-0.1, 0.2, 0.3),
+        ] {
             let cells = eye / c.size;
             let whole = cells.floor();
             let parity = (whole.x + whole.y + whole.z).rem_euclid(2.0) as u32;

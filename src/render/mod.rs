@@ -53,8 +53,9 @@ pub enum RenderError {
     #[error(transparent)]
     Vulkan(#[from] VulkanError),
     /// The WGSL did not compile.
+    /// (Not a `source()` as well: `anyhow`'s `{:#}` would print it twice.)
     #[error("shader error: {0}")]
-    Compile(#[from] CompileError),
+    Compile(CompileError),
     /// The scene asks for more than the device can do; `field` names the
     /// scene field (e.g. `camera.width`).
     #[error("{field}: {message}")]
@@ -64,6 +65,12 @@ pub enum RenderError {
         /// What limit it exceeds.
         message: String,
     },
+}
+
+impl From<CompileError> for RenderError {
+    fn from(e: CompileError) -> Self {
+        RenderError::Compile(e)
+    }
 }
 
 /// A linear-light RGBA image, row 0 at the top. Alpha is 1 where a primary
@@ -171,7 +178,10 @@ impl Renderer {
 
     /// Compiles the kernel for `features` unless cached; returns the time of
     /// (naga, pipeline creation, driver compile).
-    fn pipeline(&mut self, features: Features) -> Result<(Duration, Duration, Duration), RenderError> {
+    fn pipeline(
+        &mut self,
+        features: Features,
+    ) -> Result<(Duration, Duration, Duration), RenderError> {
         if self.pipelines.contains_key(&features) {
             return Ok(Default::default());
         }
@@ -190,13 +200,21 @@ impl Renderer {
         let dummies: Vec<_> = BINDINGS
             .iter()
             .map(|b| {
-                let usage = if *b == BindingType::Uniform { BufferUsage::Uniform } else { BufferUsage::Storage };
+                let usage = if *b == BindingType::Uniform {
+                    BufferUsage::Uniform
+                } else {
+                    BufferUsage::Storage
+                };
                 self.context.create_buffer("warm-up", usage, 256)
             })
             .collect::<Result<_, _>>()?;
         let refs: Vec<_> = dummies.iter().collect();
-        let push = PushConstants { flags: FLAG_WARM_UP, ..Zeroable::zeroed() };
-        self.context.dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
+        let push = PushConstants {
+            flags: FLAG_WARM_UP,
+            ..Zeroable::zeroed()
+        };
+        self.context
+            .dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
         let t3 = Instant::now();
         self.pipelines.insert(features, pipeline);
         Ok((t1 - t0, t2 - t1, t3 - t2))
@@ -208,7 +226,7 @@ impl Renderer {
         let bytes = width as u64 * height as u64 * 16;
         if bytes > limits.max_storage_buffer_range {
             return Err(RenderError::Scene {
-                field: "camera.width".into(),
+                field: "camera.width/camera.height".into(),
                 message: format!(
                     "{width}x{height} pixels need a {:.1} MiB image buffer, more than this device's maxStorageBufferRange of {:.1} MiB",
                     bytes as f64 / 1048576.0,
@@ -217,13 +235,24 @@ impl Renderer {
             });
         }
         for (field, side, max) in [
-            ("camera.width", width, limits.max_compute_work_group_count[0]),
-            ("camera.height", height, limits.max_compute_work_group_count[1]),
+            (
+                "camera.width",
+                width,
+                limits.max_compute_work_group_count[0],
+            ),
+            (
+                "camera.height",
+                height,
+                limits.max_compute_work_group_count[1],
+            ),
         ] {
             if side.div_ceil(TILE) > max {
                 return Err(RenderError::Scene {
                     field: field.into(),
-                    message: format!("{side} pixels exceed this device's limit of {} workgroups of {TILE}", max),
+                    message: format!(
+                        "{side} pixels exceed this device's limit of {} workgroups of {TILE}",
+                        max
+                    ),
                 });
             }
         }
@@ -234,21 +263,32 @@ impl Renderer {
     pub fn render(&mut self, scene: &Scene) -> Result<Frame, RenderError> {
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height)?;
-        let (shader_compile, pipeline_creation, driver_compile) = self.pipeline(scene.features())?;
+        let (shader_compile, pipeline_creation, driver_compile) =
+            self.pipeline(scene.features())?;
 
         let t0 = Instant::now();
         let gpu = GpuScene::new(scene);
         let ctx = &self.context;
-        let storage = |label: &str, bytes: &[u8]| ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes);
+        let storage = |label: &str, bytes: &[u8]| {
+            ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
+        };
         let buffers = [
-            ctx.create_buffer_with_data("globals", BufferUsage::Uniform, bytemuck::bytes_of(&gpu.globals))?,
+            ctx.create_buffer_with_data(
+                "globals",
+                BufferUsage::Uniform,
+                bytemuck::bytes_of(&gpu.globals),
+            )?,
             storage("planes", bytemuck::cast_slice(&gpu.planes))?,
             storage("spheres", bytemuck::cast_slice(&gpu.spheres))?,
             storage("triangles", bytemuck::cast_slice(&gpu.triangles))?,
             storage("vertex normals", bytemuck::cast_slice(&gpu.vertex_normals))?,
             storage("lights", bytemuck::cast_slice(&gpu.lights))?,
             storage("shaders", bytemuck::cast_slice(&gpu.shaders))?,
-            ctx.create_buffer("image", BufferUsage::Storage, width as u64 * height as u64 * 16)?,
+            ctx.create_buffer(
+                "image",
+                BufferUsage::Storage,
+                width as u64 * height as u64 * 16,
+            )?,
             ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
         ];
         let refs: Vec<_> = buffers.iter().collect();
@@ -262,17 +302,29 @@ impl Renderer {
         let t1 = Instant::now();
         let image_bytes = ctx.read_buffer(&buffers[7])?;
         let counter_bytes = ctx.read_buffer(&buffers[8])?;
-        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..(width * height * 16) as usize]);
+        let pixels: Vec<[f32; 4]> =
+            bytemuck::pod_collect_to_vec(&image_bytes[..(width * height * 16) as usize]);
         let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&counter_bytes[..8]);
         let readback = t1.elapsed();
         ctx.check_validation()?;
 
         Ok(Frame {
-            image: Image { width, height, pixels },
+            image: Image {
+                width,
+                height,
+                pixels,
+            },
             stats: RenderStats {
                 primary_rays: counters[0] as u64,
                 shadow_rays: counters[1] as u64,
-                timings: Timings { shader_compile, pipeline_creation, driver_compile, upload, render, readback },
+                timings: Timings {
+                    shader_compile,
+                    pipeline_creation,
+                    driver_compile,
+                    upload,
+                    render,
+                    readback,
+                },
             },
         })
     }

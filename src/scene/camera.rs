@@ -162,8 +162,14 @@ mod tests {
     #[test]
     fn look_at_rejects_bad_input() {
         let p = DVec3::ZERO;
-        assert_eq!(Camera::look_at(p, p, DVec3::Y), Err(OrientationError::ZeroViewDirection));
-        assert_eq!(Camera::look_at(p, DVec3::Z, DVec3::ZERO), Err(OrientationError::ZeroUp));
+        assert_eq!(
+            Camera::look_at(p, p, DVec3::Y),
+            Err(OrientationError::ZeroViewDirection)
+        );
+        assert_eq!(
+            Camera::look_at(p, DVec3::Z, DVec3::ZERO),
+            Err(OrientationError::ZeroUp)
+        );
         assert_eq!(
             Camera::look_at(p, DVec3::Y * 3.0, DVec3::Y),
             Err(OrientationError::UpParallelToView)

@@ -21,7 +21,10 @@ pub struct Invalid {
 impl Invalid {
     /// An invalid `field`.
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
-        Invalid { field: field.into(), message: message.into() }
+        Invalid {
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -46,14 +49,20 @@ fn finite3(field: &str, v: DVec3) -> Result<(), Invalid> {
 fn unit(field: &str, v: DVec3) -> Result<(), Invalid> {
     finite3(field, v)?;
     if (v.length() - 1.0).abs() > 1e-6 {
-        return Err(Invalid::new(field, format!("must have unit length, got {v}")));
+        return Err(Invalid::new(
+            field,
+            format!("must have unit length, got {v}"),
+        ));
     }
     Ok(())
 }
 
 fn colour(field: &str, c: Vec3) -> Result<(), Invalid> {
     if !c.is_finite() || c.min_element() < 0.0 {
-        return Err(Invalid::new(field, format!("must be finite and non-negative, got {c}")));
+        return Err(Invalid::new(
+            field,
+            format!("must be finite and non-negative, got {c}"),
+        ));
     }
     Ok(())
 }
@@ -68,18 +77,27 @@ pub(super) fn camera(c: &Camera) -> Result<(), Invalid> {
     match c.projection {
         Projection::Perspective { vfov_deg } => {
             if !(vfov_deg > 0.0 && vfov_deg < 180.0) {
-                return Err(Invalid::new("camera.fov", format!("must be in (0, 180) degrees, got {vfov_deg}")));
+                return Err(Invalid::new(
+                    "camera.fov",
+                    format!("must be in (0, 180) degrees, got {vfov_deg}"),
+                ));
             }
         }
         Projection::Orthographic { half_height } => {
             if !(half_height > 0.0 && half_height.is_finite()) {
-                return Err(Invalid::new("camera.half_height", format!("must be positive, got {half_height}")));
+                return Err(Invalid::new(
+                    "camera.half_height",
+                    format!("must be positive, got {half_height}"),
+                ));
             }
         }
     }
     for (name, v) in [("camera.width", c.width), ("camera.height", c.height)] {
         if v == 0 || v > MAX_IMAGE_SIDE {
-            return Err(Invalid::new(name, format!("must be in 1..={MAX_IMAGE_SIDE} pixels, got {v}")));
+            return Err(Invalid::new(
+                name,
+                format!("must be in 1..={MAX_IMAGE_SIDE} pixels, got {v}"),
+            ));
         }
     }
     Ok(())
@@ -97,16 +115,25 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                 colour(&f("diffuse"), p.diffuse)?;
                 colour(&f("specular"), p.specular)?;
                 if !(p.shininess >= 0.0 && p.shininess.is_finite()) {
-                    return Err(Invalid::new(f("shininess"), format!("must be finite and >= 0, got {}", p.shininess)));
+                    return Err(Invalid::new(
+                        f("shininess"),
+                        format!("must be finite and >= 0, got {}", p.shininess),
+                    ));
                 }
             }
             Shader::Checker(c) => {
                 if !(c.size > 0.0 && c.size.is_finite()) {
-                    return Err(Invalid::new(f("size"), format!("must be positive, got {}", c.size)));
+                    return Err(Invalid::new(
+                        f("size"),
+                        format!("must be positive, got {}", c.size),
+                    ));
                 }
                 for (k, id) in [("even", c.even), ("odd", c.odd)] {
                     if id >= n {
-                        return Err(Invalid::new(f(k), format!("shader index {id} out of range ({n} shaders)")));
+                        return Err(Invalid::new(
+                            f(k),
+                            format!("shader index {id} out of range ({n} shaders)"),
+                        ));
                     }
                 }
             }
@@ -135,12 +162,18 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
         }
     }
     if let Some(i) = resolved.iter().position(|r| !r) {
-        return Err(Invalid::new(format!("shaders[{i}]"), "checker shaders refer to each other in a cycle"));
+        return Err(Invalid::new(
+            format!("shaders[{i}]"),
+            "checker shaders refer to each other in a cycle",
+        ));
     }
     for (i, o) in s.objects.iter().enumerate() {
         let f = |k: &str| format!("objects[{i}].{k}");
         if o.shader >= n {
-            return Err(Invalid::new(f("shader"), format!("shader index {} out of range ({n} shaders)", o.shader)));
+            return Err(Invalid::new(
+                f("shader"),
+                format!("shader index {} out of range ({n} shaders)", o.shader),
+            ));
         }
         match &o.shape {
             Shape::Plane(p) => {
@@ -150,7 +183,10 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
             Shape::Sphere(sp) => {
                 finite3(&f("center"), sp.center)?;
                 if !(sp.radius > 0.0 && sp.radius.is_finite()) {
-                    return Err(Invalid::new(f("radius"), format!("must be positive, got {}", sp.radius)));
+                    return Err(Invalid::new(
+                        f("radius"),
+                        format!("must be positive, got {}", sp.radius),
+                    ));
                 }
             }
             Shape::Triangle(t) => {
@@ -160,7 +196,10 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
             }
             Shape::Mesh(m) => {
                 if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
-                    return Err(Invalid::new(f(&format!("positions[{p}]")), "must be finite"));
+                    return Err(Invalid::new(
+                        f(&format!("positions[{p}]")),
+                        "must be finite",
+                    ));
                 }
                 if let Some(ns) = &m.normals {
                     if ns.len() != m.positions.len() {
@@ -171,8 +210,15 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                     }
                 }
                 let nv = m.positions.len() as u64;
-                if let Some(k) = m.indices.iter().position(|t| t.iter().any(|&x| x as u64 >= nv)) {
-                    return Err(Invalid::new(f(&format!("indices[{k}]")), format!("vertex index out of range ({nv} vertices)")));
+                if let Some(k) = m
+                    .indices
+                    .iter()
+                    .position(|t| t.iter().any(|&x| x as u64 >= nv))
+                {
+                    return Err(Invalid::new(
+                        f(&format!("indices[{k}]")),
+                        format!("vertex index out of range ({nv} vertices)"),
+                    ));
                 }
             }
         }
@@ -180,7 +226,10 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
     for (i, l) in s.lights.iter().enumerate() {
         let f = |k: &str| format!("lights[{i}].{k}");
         if !(l.intensity >= 0.0 && l.intensity.is_finite()) {
-            return Err(Invalid::new(f("intensity"), format!("must be finite and >= 0, got {}", l.intensity)));
+            return Err(Invalid::new(
+                f("intensity"),
+                format!("must be finite and >= 0, got {}", l.intensity),
+            ));
         }
         colour(&f("ambient"), l.ambient)?;
         colour(&f("diffuse"), l.diffuse)?;
@@ -188,16 +237,32 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
         match l.kind {
             LightKind::Directional { direction } => unit(&f("direction"), direction)?,
             LightKind::Point { position } => finite3(&f("position"), position)?,
-            LightKind::Spot { position, direction, inner_angle, outer_angle } => {
+            LightKind::Spot {
+                position,
+                direction,
+                inner_angle,
+                outer_angle,
+            } => {
                 finite3(&f("position"), position)?;
                 unit(&f("direction"), direction)?;
                 if !(inner_angle >= 0.0 && inner_angle < outer_angle) {
-                    return Err(Invalid::new(f("inner_angle"), format!(
-                        "must satisfy 0 <= inner_angle < outer_angle, got {} and {} degrees",
-                        inner_angle.to_degrees(), outer_angle.to_degrees())));
+                    return Err(Invalid::new(
+                        f("inner_angle"),
+                        format!(
+                            "must satisfy 0 <= inner_angle < outer_angle, got {} and {} degrees",
+                            inner_angle.to_degrees(),
+                            outer_angle.to_degrees()
+                        ),
+                    ));
                 }
                 if outer_angle > std::f64::consts::FRAC_PI_2 + 1e-12 {
-                    return Err(Invalid::new(f("outer_angle"), format!("must be at most 90 degrees, got {}", outer_angle.to_degrees())));
+                    return Err(Invalid::new(
+                        f("outer_angle"),
+                        format!(
+                            "must be at most 90 degrees, got {}",
+                            outer_angle.to_degrees()
+                        ),
+                    ));
                 }
             }
         }

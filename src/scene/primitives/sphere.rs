@@ -51,7 +51,10 @@ mod tests {
 
     #[test]
     fn hits_front_and_from_inside() {
-        let s = Sphere { center: DVec3::new(0.0, 0.0, -5.0), radius: 1.0 };
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, -5.0),
+            radius: 1.0,
+        };
         assert_eq!(s.intersect(DVec3::ZERO, -DVec3::Z), Some(4.0));
         assert_eq!(s.intersect(s.center, DVec3::X), Some(1.0));
         assert_eq!(s.intersect(DVec3::ZERO, DVec3::Z), None);
@@ -61,7 +64,10 @@ mod tests {
     #[test]
     fn small_sphere_far_away_is_precise() {
         // A naive b² − c discriminant loses every digit here.
-        let s = Sphere { center: DVec3::new(0.0, 0.0, -1e7), radius: 1e-3 };
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, -1e7),
+            radius: 1e-3,
+        };
         let t = s.intersect(DVec3::ZERO, -DVec3::Z).unwrap();
         assert!((t - (1e7 - 1e-3)).abs() < 1e-8, "{t}");
     }

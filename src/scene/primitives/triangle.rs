@@ -63,13 +63,27 @@ mod tests {
 
     #[test]
     fn barycentrics_and_distance() {
-        let tri = Triangle { vertices: [DVec3::ZERO, DVec3::X, DVec3::Y] };
-        let h = tri.intersect(DVec3::new(0.25, 0.5, 2.0), -DVec3::Z).unwrap();
-        assert!((h.t - 2.0).abs() < 1e-12 && (h.u - 0.25).abs() < 1e-12 && (h.v - 0.5).abs() < 1e-12);
-        assert!(tri.intersect(DVec3::new(0.75, 0.5, 2.0), -DVec3::Z).is_none());
-        assert!(tri.intersect(DVec3::new(0.25, 0.5, 2.0), DVec3::Z).is_none());
+        let tri = Triangle {
+            vertices: [DVec3::ZERO, DVec3::X, DVec3::Y],
+        };
+        let h = tri
+            .intersect(DVec3::new(0.25, 0.5, 2.0), -DVec3::Z)
+            .unwrap();
+        assert!(
+            (h.t - 2.0).abs() < 1e-12 && (h.u - 0.25).abs() < 1e-12 && (h.v - 0.5).abs() < 1e-12
+        );
+        assert!(tri
+            .intersect(DVec3::new(0.75, 0.5, 2.0), -DVec3::Z)
+            .is_none());
+        assert!(tri
+            .intersect(DVec3::new(0.25, 0.5, 2.0), DVec3::Z)
+            .is_none());
         // Degenerate (collinear) triangle: never a hit.
-        let flat = Triangle { vertices: [DVec3::ZERO, DVec3::X, DVec3::X * 2.0] };
-        assert!(flat.intersect(DVec3::new(0.5, 0.0, 1.0), -DVec3::Z).is_none());
+        let flat = Triangle {
+            vertices: [DVec3::ZERO, DVec3::X, DVec3::X * 2.0],
+        };
+        assert!(flat
+            .intersect(DVec3::new(0.5, 0.0, 1.0), -DVec3::Z)
+            .is_none());
     }
 }
