@@ -3,6 +3,8 @@
 const KIND_PLANE: u32 = 0u;
 const KIND_SPHERE: u32 = 1u;
 const KIND_TRIANGLE: u32 = 2u;
+// A hit record that matches no primitive.
+const KIND_NONE: u32 = 0xffffffffu;
 
 struct Hit {
     found: bool,
@@ -20,7 +22,9 @@ struct Hit {
     shader: u32,
 }
 
-// Nearest hit over every primitive kind the scene has (brute force).
+// Nearest hit over every primitive kind the scene has: planes one by one
+// (they are infinite), spheres and triangles through the BVH, or one by one
+// when the kernel is built without it (the brute-force baseline).
 fn closest_hit(ray: Ray) -> Hit {
     var hit: Hit;
     hit.found = false;
@@ -36,27 +40,17 @@ fn closest_hit(ray: Ray) -> Hit {
             }
         }
     }
-    if HAS_SPHERES {
-        for (var i = 0u; i < globals.num_spheres; i++) {
-            let t = intersect_sphere(spheres[i], ray);
-            if t > 0.0 && t < hit.t {
-                hit.found = true;
-                hit.t = t;
-                hit.kind = KIND_SPHERE;
-                hit.index = i;
+    if USE_BVH {
+        bvh_closest(ray, &hit);
+    } else {
+        if HAS_SPHERES {
+            for (var i = 0u; i < globals.num_spheres; i++) {
+                closest_sphere(i, ray, &hit);
             }
         }
-    }
-    if HAS_TRIANGLES {
-        for (var i = 0u; i < globals.num_triangles; i++) {
-            let h = intersect_triangle(triangles[i], ray, hit.t);
-            if h.x > 0.0 {
-                hit.found = true;
-                hit.t = h.x;
-                hit.kind = KIND_TRIANGLE;
-                hit.index = i;
-                hit.u = h.y;
-                hit.v = h.z;
+        if HAS_TRIANGLES {
+            for (var i = 0u; i < globals.num_triangles; i++) {
+                closest_triangle(i, ray, &hit);
             }
         }
     }
@@ -64,6 +58,30 @@ fn closest_hit(ray: Ray) -> Hit {
         finish_hit(ray, &hit);
     }
     return hit;
+}
+
+// Records sphere `i` in `hit` if the ray meets it nearer.
+fn closest_sphere(i: u32, ray: Ray, hit: ptr<function, Hit>) {
+    let t = intersect_sphere(spheres[i], ray);
+    if t > 0.0 && t < (*hit).t {
+        (*hit).found = true;
+        (*hit).t = t;
+        (*hit).kind = KIND_SPHERE;
+        (*hit).index = i;
+    }
+}
+
+// Records triangle `i` in `hit` if the ray meets it nearer.
+fn closest_triangle(i: u32, ray: Ray, hit: ptr<function, Hit>) {
+    let h = intersect_triangle(triangles[i], ray, (*hit).t);
+    if h.x > 0.0 {
+        (*hit).found = true;
+        (*hit).t = h.x;
+        (*hit).kind = KIND_TRIANGLE;
+        (*hit).index = i;
+        (*hit).u = h.y;
+        (*hit).v = h.z;
+    }
 }
 
 // Position, normals and shader of the nearest hit. Both normals are turned to

@@ -20,6 +20,11 @@ override HAS_SPOT: bool = true;
 override HAS_PHONG: bool = true;
 override HAS_BLINN_PHONG: bool = true;
 override HAS_CHECKER: bool = true;
+// Kernel variants chosen by the user (render::KernelOptions).
+override USE_BVH: bool = true;
+override TRIANGLE_TEST: u32 = 0u;
+// 0: robust shadow-ray start (shadows.wgsl); > 0: fixed offset along the normal.
+override SHADOW_EPSILON: f32 = 0.0;
 
 // Mirrored by render::layout::Globals.
 struct Globals {
@@ -30,6 +35,10 @@ struct Globals {
     num_triangles: u32,
     num_lights: u32,
     num_shaders: u32,
+    num_bvh_nodes: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // Mirrored by render::layout::PushConstants.

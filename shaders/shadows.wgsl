@@ -34,14 +34,20 @@ fn occluded(hit: Hit, ls: LightSample) -> bool {
     // camera-relative position would shift their shadows, and let light leak
     // under thin occluders seen from afar.
     var origin = hit.position;
-    if hit.kind == KIND_TRIANGLE {
+    var start = hit;
+    if SHADOW_EPSILON > 0.0 {
+        // The classic alternative (render::ShadowOffset::Fixed): a fixed
+        // offset along the normal and no knowledge of where the ray starts.
+        origin += SHADOW_EPSILON * hit.geometric_normal;
+        start.kind = KIND_NONE;
+    } else if hit.kind == KIND_TRIANGLE {
         origin = offset_ray_origin(hit.position, hit.geometric_normal);
     }
     let ray = Ray(origin, ls.to_light);
     let t_max = ls.distance;
     if HAS_PLANES {
         for (var i = 0u; i < globals.num_planes; i++) {
-            if hit.kind == KIND_PLANE && hit.index == i {
+            if start.kind == KIND_PLANE && start.index == i {
                 continue;
             }
             let t = intersect_plane(planes[i], ray);
@@ -50,34 +56,46 @@ fn occluded(hit: Hit, ls: LightSample) -> bool {
             }
         }
     }
+    if USE_BVH {
+        return bvh_occluded(ray, t_max, start);
+    }
     if HAS_SPHERES {
         for (var i = 0u; i < globals.num_spheres; i++) {
-            let sphere = spheres[i];
-            if hit.kind == KIND_SPHERE && hit.index == i {
-                let to_centre = sphere.center - hit.position;
-                let into = dot(ls.to_light, to_centre);
-                if into > 0.0 && 2.0 * into < t_max {
-                    return true;
-                }
-                continue;
-            }
-            let roots = sphere_roots(sphere, ray);
-            // Either root inside (0, t_max) blocks; a ray starting inside a
-            // sphere is blocked by its far side.
-            if roots.x <= roots.y && ((roots.x > 0.0 && roots.x < t_max) || (roots.y > 0.0 && roots.y < t_max)) {
+            if sphere_blocks(i, ray, t_max, start) {
                 return true;
             }
         }
     }
     if HAS_TRIANGLES {
         for (var i = 0u; i < globals.num_triangles; i++) {
-            if hit.kind == KIND_TRIANGLE && hit.index == i {
-                continue;
-            }
-            if intersect_triangle(triangles[i], ray, t_max).x > 0.0 {
+            if triangle_blocks(i, ray, t_max, start) {
                 return true;
             }
         }
     }
     return false;
+}
+
+// Whether sphere `i` blocks the shadow ray that leaves `start`.
+fn sphere_blocks(i: u32, ray: Ray, t_max: f32, start: Hit) -> bool {
+    let sphere = spheres[i];
+    if start.kind == KIND_SPHERE && start.index == i {
+        // Its own sphere blocks exactly when the ray heads inside, along the
+        // chord 2·l·(c − p).
+        let into = dot(ray.dir, sphere.center - start.position);
+        return into > 0.0 && 2.0 * into < t_max;
+    }
+    let roots = sphere_roots(sphere, ray);
+    // Either root inside (0, t_max) blocks; a ray starting inside a sphere is
+    // blocked by its far side.
+    return roots.x <= roots.y && ((roots.x > 0.0 && roots.x < t_max) || (roots.y > 0.0 && roots.y < t_max));
+}
+
+// Whether triangle `i` blocks the shadow ray that leaves `start` (never the
+// triangle it starts on).
+fn triangle_blocks(i: u32, ray: Ray, t_max: f32, start: Hit) -> bool {
+    if start.kind == KIND_TRIANGLE && start.index == i {
+        return false;
+    }
+    return intersect_triangle(triangles[i], ray, t_max).x > 0.0;
 }

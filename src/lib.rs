@@ -6,6 +6,7 @@
 //!
 //! * [`scene`] is the plain, validated scene model (camera, primitives, lights,
 //!   shading models), independent of Vulkan;
+//! * [`bvh`] builds the bounding volume hierarchy the kernel traverses;
 //! * [`loaders`] build it from JSON scene files and glTF 2.0 files;
 //! * [`render`] turns it into GPU buffers and a specialised compute kernel
 //!   (WGSL from `shaders/`, compiled by naga) and runs it through
@@ -21,6 +22,7 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
+pub mod bvh;
 pub mod error;
 pub mod loaders;
 pub mod output;

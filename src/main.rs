@@ -9,7 +9,9 @@ use clap::{Parser, Subcommand};
 
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::output;
-use penumbra::render::{RenderError, Renderer, RendererOptions, ShaderSource};
+use penumbra::render::{
+    Accel, KernelOptions, RenderError, Renderer, RendererOptions, ShaderSource, TriangleTest,
+};
 use penumbra::vulkan::{Context, DeviceSelector};
 
 #[derive(Parser)]
@@ -26,45 +28,57 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (.json, .gltf or .glb) to a PNG (sRGB, 8 bit) or OpenEXR (linear float) file.
-    Render {
-        /// The scene file.
-        scene: PathBuf,
-        /// Output image; the extension picks the format (.png or .exr).
-        #[arg(short, long, default_value = "out.png")]
-        output: PathBuf,
-        /// Image width in pixels (overrides the scene's).
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        width: Option<u32>,
-        /// Image height in pixels (overrides the scene's).
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        height: Option<u32>,
-        /// Vulkan device: an index from `penumbra devices`, or part of its name.
-        #[arg(long)]
-        device: Option<DeviceSelector>,
-        /// Read the WGSL from this directory instead of the copy built into the binary.
-        #[arg(long)]
-        shaders: Option<PathBuf>,
-        /// Enable the Khronos validation layer and fail on any error it reports.
-        #[arg(long)]
-        validate: bool,
-    },
+    Render(RenderArgs),
     /// List the Vulkan devices with their type and driver version.
     Devices,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Output image; the extension picks the format (.png or .exr).
+    #[arg(short, long, default_value = "out.png")]
+    output: PathBuf,
+    /// Image width in pixels (overrides the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: Option<u32>,
+    /// Image height in pixels (overrides the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// Vulkan device: an index from `penumbra devices`, or part of its name.
+    #[arg(long)]
+    device: Option<DeviceSelector>,
+    /// Read the WGSL from this directory instead of the copy built into the binary.
+    #[arg(long)]
+    shaders: Option<PathBuf>,
+    /// Enable the Khronos validation layer and fail on any error it reports.
+    #[arg(long)]
+    validate: bool,
+    /// How rays find spheres and triangles: `bvh` or `brute-force`.
+    #[arg(long, default_value = "bvh")]
+    accel: Accel,
+    /// Ray/triangle test order: `uv-first` (the seminar's) or `t-first`.
+    #[arg(long, default_value = "uv-first")]
+    triangle_test: TriangleTest,
 }
 
 fn ms(d: std::time::Duration) -> String {
     format!("{:.1} ms", d.as_secs_f64() * 1e3)
 }
 
-fn render(
-    scene: PathBuf,
-    out: PathBuf,
-    width: Option<u32>,
-    height: Option<u32>,
-    device: Option<DeviceSelector>,
-    shaders: Option<PathBuf>,
-    validation: bool,
-) -> anyhow::Result<()> {
+fn render(args: RenderArgs) -> anyhow::Result<()> {
+    let RenderArgs {
+        scene,
+        output: out,
+        width,
+        height,
+        device,
+        shaders,
+        validate,
+        accel,
+        triangle_test,
+    } = args;
     // Refuse an unwritable output before spending time on the render.
     output::check_writable(&out)?;
     let t0 = Instant::now();
@@ -74,10 +88,16 @@ fn render(
         eprintln!("note: {note}");
     }
     let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
+    let kernel = KernelOptions {
+        accel,
+        triangle_test,
+        ..Default::default()
+    };
     let mut renderer = Renderer::new(&RendererOptions {
         device,
-        validation,
+        validation: validate,
         shaders,
+        kernel,
     })?;
     let frame = renderer.render(&loaded.scene).map_err(|e| match e {
         // Device limits name a scene field: say which file.
@@ -100,7 +120,7 @@ fn render(
     let t = &s.timings;
     let dev = renderer.device();
     println!(
-        "{} ({}): {}x{}, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s",
+        "{} ({}): {}x{}, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s",
         dev.name,
         dev.device_type,
         frame.image.width,
@@ -112,6 +132,7 @@ fn render(
         ms(t.shader_compile),
         ms(t.pipeline_creation),
         ms(t.driver_compile),
+        ms(t.accel_build),
         ms(t.upload),
         ms(t.render),
         ms(t.readback),
@@ -135,15 +156,7 @@ fn devices() -> anyhow::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render {
-            scene,
-            output,
-            width,
-            height,
-            device,
-            shaders,
-            validate,
-        } => render(scene, output, width, height, device, shaders, validate),
+        Command::Render(args) => render(args),
         Command::Devices => devices(),
     };
     match result {

@@ -26,6 +26,7 @@ pub const SHADER_FILES: &[&str] = &[
     "shading/blinn_phong.wgsl",
     "shading/checker.wgsl",
     "shadows.wgsl",
+    "bvh.wgsl",
 ];
 
 /// The files built into the binary, so an installed `penumbra` needs no
@@ -44,6 +45,7 @@ const EMBEDDED: &[&str] = &[
     include_str!("../../shaders/shading/blinn_phong.wgsl"),
     include_str!("../../shaders/shading/checker.wgsl"),
     include_str!("../../shaders/shadows.wgsl"),
+    include_str!("../../shaders/bvh.wgsl"),
 ];
 
 /// The compute kernel's entry point.
@@ -156,8 +158,12 @@ impl Assembled {
             .map_err(|e| self.error_at(e.location(&self.text), e.message().to_string()))
     }
 
-    /// Compiles the kernel for `features` to SPIR-V 1.3 (Vulkan 1.1).
-    pub fn compile(&self, features: &Features) -> Result<Vec<u32>, CompileError> {
+    /// Compiles the kernel for `features` and `kernel` to SPIR-V 1.3 (Vulkan 1.1).
+    pub fn compile(
+        &self,
+        features: &Features,
+        kernel: &KernelOptions,
+    ) -> Result<Vec<u32>, CompileError> {
         use naga::valid::{Capabilities, ValidationFlags, Validator};
         let module = self.parse()?;
         let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
@@ -168,6 +174,14 @@ impl Assembled {
         for (name, on) in override_values(features) {
             constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
         }
+        let bvh = kernel.accel == Accel::Bvh;
+        constants.insert("USE_BVH".into(), if bvh { 1.0 } else { 0.0 });
+        constants.insert("TRIANGLE_TEST".into(), kernel.triangle_test as u32 as f64);
+        let epsilon = match kernel.shadow_offset {
+            ShadowOffset::Robust => 0.0,
+            ShadowOffset::Fixed(e) => e as f64,
+        };
+        constants.insert("SHADOW_EPSILON".into(), epsilon);
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             &module,
             &info,
@@ -189,6 +203,84 @@ impl Assembled {
                 message: e.to_string(),
             }
         })
+    }
+}
+
+/// How the kernel finds the nearest sphere or triangle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Accel {
+    /// Traverse a bounding volume hierarchy (the default).
+    #[default]
+    Bvh,
+    /// Test every primitive (the baseline the BVH is measured against).
+    BruteForce,
+}
+
+/// The ray/triangle test's order of work (the seminar's comparison).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TriangleTest {
+    /// Möller–Trumbore computing u, then v, then t, rejecting early (default).
+    #[default]
+    UvFirst = 0,
+    /// The same test computing t first.
+    TFirst = 1,
+}
+
+/// Where shadow rays start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ShadowOffset {
+    /// Skip the primitive the ray starts on, decide a sphere's own shadow
+    /// exactly, and start triangle rays a few ulps off the surface
+    /// (`shaders/shadows.wgsl`): no acne and no leaks (the default).
+    #[default]
+    Robust,
+    /// The classic alternative: start `epsilon` world units along the normal
+    /// (turned to the viewer) and test every primitive. Used to compare with
+    /// other renderers set up that way.
+    Fixed(f32),
+}
+
+impl Eq for ShadowOffset {}
+
+impl std::hash::Hash for ShadowOffset {
+    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
+        match self {
+            ShadowOffset::Robust => 0u32.hash(h),
+            ShadowOffset::Fixed(e) => e.to_bits().hash(h),
+        }
+    }
+}
+
+/// Kernel variants a user chooses (as opposed to features a scene implies).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct KernelOptions {
+    /// BVH or brute force.
+    pub accel: Accel,
+    /// Order of the ray/triangle test.
+    pub triangle_test: TriangleTest,
+    /// Where shadow rays start.
+    pub shadow_offset: ShadowOffset,
+}
+
+impl std::str::FromStr for Accel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "bvh" => Ok(Accel::Bvh),
+            "brute-force" => Ok(Accel::BruteForce),
+            _ => Err(format!("expected `bvh` or `brute-force`, got `{s}`")),
+        }
+    }
+}
+
+impl std::str::FromStr for TriangleTest {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "uv-first" => Ok(TriangleTest::UvFirst),
+            "t-first" => Ok(TriangleTest::TFirst),
+            _ => Err(format!("expected `uv-first` or `t-first`, got `{s}`")),
+        }
     }
 }
 
@@ -252,10 +344,19 @@ mod tests {
             blinn_phong: true,
             checker: true,
         };
-        let words = src.compile(&all).unwrap();
-        assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
-        assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
-        src.compile(&Features::default()).unwrap();
+        for accel in [Accel::Bvh, Accel::BruteForce] {
+            for triangle_test in [TriangleTest::UvFirst, TriangleTest::TFirst] {
+                let kernel = KernelOptions {
+                    accel,
+                    triangle_test,
+                    shadow_offset: ShadowOffset::Fixed(1e-4),
+                };
+                let words = src.compile(&all, &kernel).unwrap();
+                assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
+                assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
+                src.compile(&Features::default(), &kernel).unwrap();
+            }
+        }
     }
 
     #[test]
@@ -281,7 +382,9 @@ mod tests {
         let broken = ShaderSource::Directory(dir.path().to_path_buf())
             .assemble()
             .unwrap();
-        let err = broken.compile(&Features::default()).unwrap_err();
+        let err = broken
+            .compile(&Features::default(), &KernelOptions::default())
+            .unwrap_err();
         let want_line = include_str!("../../shaders/lights.wgsl")
             .lines()
             .position(|l| l.contains("let dist = sqrt(dist2);"))

@@ -13,6 +13,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
+use crate::bvh::{Aabb, Bvh};
 use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
 
 /// Mirrors `Camera` in `shaders/camera.wgsl`.
@@ -38,6 +39,10 @@ pub struct Globals {
     pub num_triangles: u32,
     pub num_lights: u32,
     pub num_shaders: u32,
+    pub num_bvh_nodes: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Mirrors `PushConstants` in `shaders/render.wgsl`.
@@ -130,6 +135,19 @@ pub struct ShaderNode {
     pub _pad: [u32; 2],
 }
 
+/// Mirrors `BvhNode` in `shaders/bvh.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    pub index: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+/// `bvh_prims` entries with this bit set are spheres, else triangles.
+pub const PRIM_SPHERE: u32 = 1 << 31;
+
 /// Shader kinds, as in `shaders/shading/shader.wgsl`.
 pub const SHADER_PHONG: u32 = 0;
 /// Blinn-Phong shader kind.
@@ -153,6 +171,10 @@ pub struct GpuScene {
     pub vertex_normals: Vec<VertexNormals>,
     pub lights: Vec<Light>,
     pub shaders: Vec<ShaderNode>,
+    pub bvh_nodes: Vec<BvhNode>,
+    pub bvh_prims: Vec<u32>,
+    /// Depth of the BVH (0 when built without one).
+    pub bvh_depth: usize,
 }
 
 fn f3(v: DVec3) -> [f32; 3] {
@@ -168,7 +190,8 @@ fn n4(v: DVec3) -> [f32; 4] {
 }
 
 impl GpuScene {
-    /// Lays out a validated scene, camera-relative.
+    /// Lays out a validated scene, camera-relative (without a BVH: see
+    /// [`GpuScene::build_bvh`]).
     pub fn new(scene: &Scene) -> GpuScene {
         let cam = &scene.camera;
         let eye = cam.position;
@@ -304,9 +327,88 @@ impl GpuScene {
             num_triangles: g.triangles.len() as u32,
             num_lights: g.lights.len() as u32,
             num_shaders: g.shaders.len() as u32,
+            num_bvh_nodes: 0,
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         };
         g
     }
+
+    /// Builds the BVH over the primitives exactly as the GPU sees them (the
+    /// rounded `f32` values), with boxes rounded outwards to `f32` and padded
+    /// by a few ulps so that no hit the intersection routines report can lie
+    /// outside its box.
+    pub fn build_bvh(&mut self) {
+        let v = |a: [f32; 3]| DVec3::from_array(a.map(f64::from));
+        let mut boxes: Vec<Aabb> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let v0 = v(t.v0);
+                Aabb::of_points(&[v0, v0 + v(t.e1), v0 + v(t.e2)])
+            })
+            .collect();
+        boxes.extend(self.spheres.iter().map(|s| {
+            let r = DVec3::splat(s.radius as f64);
+            Aabb {
+                min: v(s.center) - r,
+                max: v(s.center) + r,
+            }
+        }));
+        let bvh = Bvh::build(&boxes);
+        let n_tri = self.triangles.len() as u32;
+        self.bvh_prims = bvh
+            .prims
+            .iter()
+            .map(|&p| {
+                if p < n_tri {
+                    p
+                } else {
+                    (p - n_tri) | PRIM_SPHERE
+                }
+            })
+            .collect();
+        self.bvh_nodes = bvh
+            .nodes
+            .iter()
+            .map(|n| {
+                let (min, max) = outward_f32(n.bounds);
+                BvhNode {
+                    min,
+                    index: n.index,
+                    max,
+                    count: n.count,
+                }
+            })
+            .collect();
+        self.bvh_depth = bvh.depth;
+        self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
+    }
+}
+
+/// A box in `f32`, rounded outwards and padded by 2⁻²⁰ of its largest
+/// coordinate magnitude (a few ulps), so it contains the `f64` box and the
+/// rounding error of the ray/primitive tests.
+fn outward_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
+    let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 20) as f64);
+    let down = |x: f64| {
+        let f = (x - pad) as f32;
+        if f as f64 > x - pad {
+            f.next_down()
+        } else {
+            f
+        }
+    };
+    let up = |x: f64| {
+        let f = (x + pad) as f32;
+        if (f as f64) < x + pad {
+            f.next_up()
+        } else {
+            f
+        }
+    };
+    (b.min.to_array().map(down), b.max.to_array().map(up))
 }
 
 /// The point of a plane nearest to `eye`: a far-away `point` on the plane
@@ -345,9 +447,14 @@ mod tests {
                     num_spheres,
                     num_triangles,
                     num_lights,
-                    num_shaders
+                    num_shaders,
+                    num_bvh_nodes,
+                    _pad0,
+                    _pad1,
+                    _pad2
                 ]
             ),
+            layout!("BvhNode", BvhNode, [min, index, max, count]),
             layout!("PushConstants", PushConstants, [origin, flags, _pad]),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),

@@ -15,14 +15,14 @@ use crate::vulkan::{
     BindingType, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo, DeviceSelector,
     VulkanError,
 };
-pub use compile::{CompileError, ShaderSource};
+pub use compile::{Accel, CompileError, KernelOptions, ShaderSource, ShadowOffset, TriangleTest};
 use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
 const TILE: u32 = 8;
 
 /// Binding types of set 0, in binding order (see `shaders/`).
-const BINDINGS: [BindingType; 9] = [
+const BINDINGS: [BindingType; 11] = [
     BindingType::Uniform,          // 0 globals
     BindingType::StorageReadOnly,  // 1 planes
     BindingType::StorageReadOnly,  // 2 spheres
@@ -32,6 +32,8 @@ const BINDINGS: [BindingType; 9] = [
     BindingType::StorageReadOnly,  // 6 shader nodes
     BindingType::StorageReadWrite, // 7 image
     BindingType::StorageReadWrite, // 8 counters
+    BindingType::StorageReadOnly,  // 9 BVH nodes
+    BindingType::StorageReadOnly,  // 10 BVH primitive references
 ];
 
 /// How to set up a [`Renderer`].
@@ -44,6 +46,8 @@ pub struct RendererOptions {
     pub validation: bool,
     /// Where the WGSL comes from.
     pub shaders: ShaderSource,
+    /// BVH or brute force, and the ray/triangle test.
+    pub kernel: KernelOptions,
 }
 
 /// Why a frame could not be rendered.
@@ -103,6 +107,8 @@ pub struct Timings {
     /// SPIR-V to machine code then), measured with an empty warm-up dispatch;
     /// zero when cached.
     pub driver_compile: Duration,
+    /// Building the BVH on the host (zero for brute force).
+    pub accel_build: Duration,
     /// Laying out the scene and uploading the buffers.
     pub upload: Duration,
     /// The render dispatch, submit to completion.
@@ -120,6 +126,12 @@ pub struct RenderStats {
     pub shadow_rays: u64,
     /// Time per phase.
     pub timings: Timings,
+    /// BVH nodes (0 for brute force).
+    pub bvh_nodes: usize,
+    /// BVH depth (root = 0).
+    pub bvh_depth: usize,
+    /// Bytes of the BVH on the GPU (nodes and primitive references).
+    pub bvh_bytes: usize,
 }
 
 impl RenderStats {
@@ -147,8 +159,9 @@ pub struct Frame {
 /// [`Renderer::render`] per scene: kernels are cached by feature set.
 pub struct Renderer {
     // Field order matters: pipelines must drop before the context.
-    pipelines: HashMap<Features, ComputePipeline>,
+    pipelines: HashMap<(Features, KernelOptions), ComputePipeline>,
     shaders: ShaderSource,
+    kernel: KernelOptions,
     context: Context,
 }
 
@@ -162,6 +175,7 @@ impl Renderer {
         Ok(Renderer {
             pipelines: HashMap::new(),
             shaders: opts.shaders.clone(),
+            kernel: opts.kernel,
             context,
         })
     }
@@ -169,6 +183,17 @@ impl Renderer {
     /// The device in use.
     pub fn device(&self) -> &DeviceInfo {
         self.context.info()
+    }
+
+    /// The kernel variant in use.
+    pub fn kernel(&self) -> KernelOptions {
+        self.kernel
+    }
+
+    /// Switches the kernel variant (BVH or brute force, triangle test); the
+    /// pipeline cache keeps every variant compiled so far.
+    pub fn set_kernel(&mut self, kernel: KernelOptions) {
+        self.kernel = kernel;
     }
 
     /// Forgets compiled kernels (after a shader edit).
@@ -182,11 +207,12 @@ impl Renderer {
         &mut self,
         features: Features,
     ) -> Result<(Duration, Duration, Duration), RenderError> {
-        if self.pipelines.contains_key(&features) {
+        let key = (features, self.kernel);
+        if self.pipelines.contains_key(&key) {
             return Ok(Default::default());
         }
         let t0 = Instant::now();
-        let spirv = self.shaders.assemble()?.compile(&features)?;
+        let spirv = self.shaders.assemble()?.compile(&features, &self.kernel)?;
         let t1 = Instant::now();
         let pipeline = self.context.create_compute_pipeline(
             &spirv,
@@ -216,7 +242,7 @@ impl Renderer {
         self.context
             .dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
         let t3 = Instant::now();
-        self.pipelines.insert(features, pipeline);
+        self.pipelines.insert(key, pipeline);
         Ok((t1 - t0, t2 - t1, t3 - t2))
     }
 
@@ -267,7 +293,14 @@ impl Renderer {
             self.pipeline(scene.features())?;
 
         let t0 = Instant::now();
-        let gpu = GpuScene::new(scene);
+        let mut gpu = GpuScene::new(scene);
+        let layout = t0.elapsed();
+        let t_bvh = Instant::now();
+        if self.kernel.accel == Accel::Bvh {
+            gpu.build_bvh();
+        }
+        let accel_build = t_bvh.elapsed();
+        let t0 = Instant::now();
         let ctx = &self.context;
         let storage = |label: &str, bytes: &[u8]| {
             ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
@@ -290,11 +323,13 @@ impl Renderer {
                 width as u64 * height as u64 * 16,
             )?,
             ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
+            storage("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
+            storage("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
         ];
         let refs: Vec<_> = buffers.iter().collect();
-        let upload = t0.elapsed();
+        let upload = layout + t0.elapsed();
 
-        let pipeline = &self.pipelines[&scene.features()];
+        let pipeline = &self.pipelines[&(scene.features(), self.kernel)];
         let push = PushConstants::zeroed();
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
         let render = ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
@@ -317,10 +352,14 @@ impl Renderer {
             stats: RenderStats {
                 primary_rays: counters[0] as u64,
                 shadow_rays: counters[1] as u64,
+                bvh_nodes: gpu.bvh_nodes.len(),
+                bvh_depth: gpu.bvh_depth,
+                bvh_bytes: gpu.bvh_nodes.len() * 32 + gpu.bvh_prims.len() * 4,
                 timings: Timings {
                     shader_compile,
                     pipeline_creation,
                     driver_compile,
+                    accel_build,
                     upload,
                     render,
                     readback,
