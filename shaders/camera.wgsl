@@ -5,16 +5,18 @@
 // Mirrored by render::layout::Camera.
 struct Camera {
     right: vec3<f32>,
-    width: u32,
-    up: vec3<f32>,
-    height: u32,
-    forward: vec3<f32>,
     orthographic: u32,
+    up: vec3<f32>,
+    _pad0: u32,
+    forward: vec3<f32>,
+    _pad1: u32,
 }
 
-// The ray through the centre of pixel `px`; row 0 is the top of the image.
-fn primary_ray(cam: Camera, px: vec2<u32>) -> Ray {
-    let size = vec2<f32>(f32(cam.width), f32(cam.height));
+// The ray through the centre of pixel `px` of an image of `image_size`
+// pixels; row 0 is the top of the image. The image size comes with each
+// dispatch, so a preview at a lower resolution sees the same frustum.
+fn primary_ray(cam: Camera, px: vec2<u32>, image_size: vec2<u32>) -> Ray {
+    let size = vec2<f32>(image_size);
     let ndc = vec2<f32>(
         (f32(px.x) + 0.5) / size.x * 2.0 - 1.0,
         1.0 - (f32(px.y) + 0.5) / size.y * 2.0,

@@ -43,10 +43,15 @@ struct Globals {
 
 // Mirrored by render::layout::PushConstants.
 struct PushConstants {
-    // Pixel offset of this dispatch (tiling), and flags.
+    // Pixel offset of this dispatch (tiling), and the image size in pixels
+    // (at most the uploaded image's; smaller for previews).
     origin: vec2<u32>,
+    size: vec2<u32>,
     flags: u32,
-    _pad: u32,
+    // Progressive rendering: which pass this is.
+    pass_index: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 const FLAG_WARM_UP: u32 = 1u;
@@ -71,8 +76,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
     let px = gid.xy + push.origin;
     var shadow_rays = 0u;
     var primary = 0u;
-    if px.x < globals.camera.width && px.y < globals.camera.height {
-        let ray = primary_ray(globals.camera, px);
+    if px.x < push.size.x && px.y < push.size.y {
+        let ray = primary_ray(globals.camera, px, push.size);
         let hit = closest_hit(ray);
         var colour = globals.background;
         var alpha = 0.0;
@@ -80,7 +85,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
             colour = shade(ray, hit, &shadow_rays);
             alpha = 1.0;
         }
-        image[px.y * globals.camera.width + px.x] = vec4<f32>(colour, alpha);
+        image[px.y * push.size.x + px.x] = vec4<f32>(colour, alpha);
         primary = 1u;
     }
     // One global atomic per workgroup instead of one per pixel.

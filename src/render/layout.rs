@@ -21,11 +21,11 @@ use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Camera {
     pub right: [f32; 3],
-    pub width: u32,
-    pub up: [f32; 3],
-    pub height: u32,
-    pub forward: [f32; 3],
     pub orthographic: u32,
+    pub up: [f32; 3],
+    pub _pad0: u32,
+    pub forward: [f32; 3],
+    pub _pad1: u32,
 }
 
 /// Mirrors `Globals` in `shaders/render.wgsl`.
@@ -50,8 +50,11 @@ pub struct Globals {
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct PushConstants {
     pub origin: [u32; 2],
+    pub size: [u32; 2],
     pub flags: u32,
-    pub _pad: u32,
+    pub pass_index: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
@@ -198,11 +201,11 @@ impl GpuScene {
         let (hw, hh) = cam.half_extent();
         let camera = Camera {
             right: f3(cam.orientation.x_axis * hw),
-            width: cam.width,
-            up: f3(cam.orientation.y_axis * hh),
-            height: cam.height,
-            forward: f3(-cam.orientation.z_axis),
             orthographic: matches!(cam.projection, Projection::Orthographic { .. }) as u32,
+            up: f3(cam.orientation.y_axis * hh),
+            _pad0: 0,
+            forward: f3(-cam.orientation.z_axis),
+            _pad1: 0,
         };
         let mut g = GpuScene::default();
         for (object, o) in scene.objects.iter().enumerate() {
@@ -435,7 +438,7 @@ mod tests {
             layout!(
                 "Camera",
                 Camera,
-                [right, width, up, height, forward, orthographic]
+                [right, orthographic, up, _pad0, forward, _pad1]
             ),
             layout!(
                 "Globals",
@@ -455,7 +458,11 @@ mod tests {
                 ]
             ),
             layout!("BvhNode", BvhNode, [min, index, max, count]),
-            layout!("PushConstants", PushConstants, [origin, flags, _pad]),
+            layout!(
+                "PushConstants",
+                PushConstants,
+                [origin, size, flags, pass_index, _pad0, _pad1]
+            ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
             layout!("Triangle", Triangle, [v0, shader, e1, object, e2, normals]),

@@ -12,8 +12,8 @@ use bytemuck::Zeroable;
 
 use crate::scene::{Features, Scene};
 use crate::vulkan::{
-    BindingType, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo, DeviceSelector,
-    VulkanError,
+    BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
+    DeviceSelector, VulkanError,
 };
 pub use compile::{Accel, CompileError, KernelOptions, ShaderSource, ShadowOffset, TriangleTest};
 use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
@@ -155,6 +155,37 @@ pub struct Frame {
     pub stats: RenderStats,
 }
 
+/// A scene laid out and uploaded to the device, ready to render.
+pub struct UploadedScene {
+    buffers: Vec<Buffer>,
+    features: Features,
+    kernel: KernelOptions,
+    width: u32,
+    height: u32,
+    accel_build: Duration,
+    upload: Duration,
+    bvh_nodes: usize,
+    bvh_depth: usize,
+    bvh_bytes: usize,
+}
+
+impl UploadedScene {
+    /// The scene's full image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The kinds of primitive, light and shader the scene uses.
+    pub fn features(&self) -> Features {
+        self.features
+    }
+
+    /// Time of the BVH build and of the upload.
+    pub fn upload_timings(&self) -> (Duration, Duration) {
+        (self.accel_build, self.upload)
+    }
+}
+
 /// Renders scenes on one Vulkan device. Create it once and call
 /// [`Renderer::render`] per scene: kernels are cached by feature set.
 pub struct Renderer {
@@ -285,13 +316,12 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame of a validated scene.
-    pub fn render(&mut self, scene: &Scene) -> Result<Frame, RenderError> {
+    /// Lays out a validated scene, builds its BVH and uploads it. The result
+    /// can be rendered many times, at any size up to the scene's own, and
+    /// survives shader edits (see [`Renderer::render_uploaded`]).
+    pub fn upload(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height)?;
-        let (shader_compile, pipeline_creation, driver_compile) =
-            self.pipeline(scene.features())?;
-
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let layout = t0.elapsed();
@@ -305,7 +335,8 @@ impl Renderer {
         let storage = |label: &str, bytes: &[u8]| {
             ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
         };
-        let buffers = [
+        let image_bytes = width as u64 * height as u64 * 16;
+        let buffers = vec![
             ctx.create_buffer_with_data(
                 "globals",
                 BufferUsage::Uniform,
@@ -317,28 +348,70 @@ impl Renderer {
             storage("vertex normals", bytemuck::cast_slice(&gpu.vertex_normals))?,
             storage("lights", bytemuck::cast_slice(&gpu.lights))?,
             storage("shaders", bytemuck::cast_slice(&gpu.shaders))?,
-            ctx.create_buffer(
-                "image",
-                BufferUsage::Storage,
-                width as u64 * height as u64 * 16,
-            )?,
+            ctx.create_buffer("image", BufferUsage::Storage, image_bytes)?,
             ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
             storage("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
             storage("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
         ];
-        let refs: Vec<_> = buffers.iter().collect();
-        let upload = layout + t0.elapsed();
+        Ok(UploadedScene {
+            buffers,
+            features: scene.features(),
+            kernel: self.kernel,
+            width,
+            height,
+            accel_build,
+            upload: layout + t0.elapsed(),
+            bvh_nodes: gpu.bvh_nodes.len(),
+            bvh_depth: gpu.bvh_depth,
+            bvh_bytes: gpu.bvh_nodes.len() * 32 + gpu.bvh_prims.len() * 4,
+        })
+    }
 
-        let pipeline = &self.pipelines[&(scene.features(), self.kernel)];
-        let push = PushConstants::zeroed();
+    /// Renders an uploaded scene at `width`×`height` pixels (at most the
+    /// scene's size; smaller sizes keep the field of view: previews). Compiles
+    /// the kernel first if the cache does not have it.
+    pub fn render_uploaded(
+        &mut self,
+        scene: &UploadedScene,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, RenderError> {
+        if width == 0 || height == 0 || width > scene.width || height > scene.height {
+            return Err(RenderError::Scene {
+                field: "camera.width/camera.height".into(),
+                message: format!(
+                    "{width}x{height} pixels: must be between 1x1 and the uploaded size {}x{}",
+                    scene.width, scene.height
+                ),
+            });
+        }
+        // The BVH buffers are empty for a scene uploaded for brute force.
+        let key_kernel = KernelOptions {
+            accel: scene.kernel.accel,
+            ..self.kernel
+        };
+        let saved = std::mem::replace(&mut self.kernel, key_kernel);
+        let compiled = self.pipeline(scene.features);
+        self.kernel = saved;
+        let (shader_compile, pipeline_creation, driver_compile) = compiled?;
+        let ctx = &self.context;
+        // Zero the ray counters of any earlier render of this upload.
+        let refs: Vec<_> = scene.buffers.iter().collect();
+        let pipeline = &self.pipelines[&(scene.features, key_kernel)];
+        let push = PushConstants {
+            size: [width, height],
+            ..Zeroable::zeroed()
+        };
+        let counters_before: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&ctx.read_buffer(&scene.buffers[8])?[..8]);
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
         let render = ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
 
         let t1 = Instant::now();
-        let image_bytes = ctx.read_buffer(&buffers[7])?;
-        let counter_bytes = ctx.read_buffer(&buffers[8])?;
-        let pixels: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&image_bytes[..(width * height * 16) as usize]);
+        let image_bytes = ctx.read_buffer(&scene.buffers[7])?;
+        let counter_bytes = ctx.read_buffer(&scene.buffers[8])?;
+        let n = width as usize * height as usize;
+        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]);
         let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&counter_bytes[..8]);
         let readback = t1.elapsed();
         ctx.check_validation()?;
@@ -350,21 +423,31 @@ impl Renderer {
                 pixels,
             },
             stats: RenderStats {
-                primary_rays: counters[0] as u64,
-                shadow_rays: counters[1] as u64,
-                bvh_nodes: gpu.bvh_nodes.len(),
-                bvh_depth: gpu.bvh_depth,
-                bvh_bytes: gpu.bvh_nodes.len() * 32 + gpu.bvh_prims.len() * 4,
+                primary_rays: counters[0].wrapping_sub(counters_before[0]) as u64,
+                shadow_rays: counters[1].wrapping_sub(counters_before[1]) as u64,
+                bvh_nodes: scene.bvh_nodes,
+                bvh_depth: scene.bvh_depth,
+                bvh_bytes: scene.bvh_bytes,
                 timings: Timings {
                     shader_compile,
                     pipeline_creation,
                     driver_compile,
-                    accel_build,
-                    upload,
+                    accel_build: Duration::ZERO,
+                    upload: Duration::ZERO,
                     render,
                     readback,
                 },
             },
         })
+    }
+
+    /// Renders one frame of a validated scene: [`Renderer::upload`] then
+    /// [`Renderer::render_uploaded`] at the scene's size.
+    pub fn render(&mut self, scene: &Scene) -> Result<Frame, RenderError> {
+        let uploaded = self.upload(scene)?;
+        let mut frame = self.render_uploaded(&uploaded, uploaded.width, uploaded.height)?;
+        frame.stats.timings.accel_build = uploaded.accel_build;
+        frame.stats.timings.upload = uploaded.upload;
+        Ok(frame)
     }
 }
