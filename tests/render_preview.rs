@@ -24,10 +24,6 @@ fn preview_equals_a_render_at_that_size_and_reuse_is_exact() {
     assert_eq!(again.image, want.image);
     assert_eq!(again.stats.primary_rays, 240 * 135);
     // Larger than uploaded: a clear error.
-    let err = r
-        .render_uploaded(&up, 961, 540)
-        .err()
-        .expect("too large")
-        .to_string();
+    let err = r.render_uploaded(&up, 961, 540).unwrap_err().to_string();
     assert!(err.contains("uploaded size 960x540"), "{err}");
 }
