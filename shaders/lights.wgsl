@@ -1,23 +1,39 @@
-// Directional, point and spot lights. The host pre-multiplies the diffuse and
-// specular colours by the intensity; the ambient colour is not scaled.
+// Directional, point and spot lights, and area lights (rectangle, sphere).
+// The host pre-multiplies the diffuse and specular colours by the intensity;
+// the ambient colour is not scaled.
+//
+// An area light of intensity I is the limit of N point lights of intensity
+// I/N spread uniformly over its surface (for the rectangle each weighted by
+// the emitter's cosine); the kernel takes `samples` of them per pass.
 
 const LIGHT_DIRECTIONAL: u32 = 0u;
 const LIGHT_POINT: u32 = 1u;
 const LIGHT_SPOT: u32 = 2u;
+const LIGHT_RECT: u32 = 3u;
+const LIGHT_SPHERE: u32 = 4u;
 
 // Mirrored by render::layout::Light.
 struct Light {
+    // Point and spot: position; rectangle: corner; sphere: centre.
     position: vec3<f32>,
     kind: u32,
-    // Direction the light travels (directional) or the cone axis (spot).
+    // Direction the light travels (directional), the cone axis (spot), or
+    // the emitting side's unit normal (rectangle).
     direction: vec3<f32>,
     // KHR_lights_punctual cone: attenuation = clamp(cos * scale + offset, 0, 1)^2.
     cone_scale: f32,
     ambient: vec3<f32>,
     cone_offset: f32,
     diffuse: vec3<f32>,
-    _pad0: u32,
+    // Samples per pass (1 for punctual lights).
+    samples: u32,
     specular: vec3<f32>,
+    // Sphere light radius.
+    radius: f32,
+    // Rectangle edges.
+    edge1: vec3<f32>,
+    _pad0: u32,
+    edge2: vec3<f32>,
     _pad1: u32,
 }
 
@@ -31,9 +47,43 @@ struct LightSample {
     falloff: f32,
 }
 
-fn sample_light(light: Light, p: vec3<f32>) -> LightSample {
+// How many samples a light takes per pass.
+fn light_sample_count(light: Light) -> u32 {
+    if HAS_AREA_LIGHTS {
+        return light.samples;
+    }
+    return 1u;
+}
+
+// Sample `uv` in [0, 1)² of light `light` as seen from `p`. For area lights
+// the falloff includes the 1/N of each of the N point lights.
+fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> LightSample {
     if HAS_DIRECTIONAL && light.kind == LIGHT_DIRECTIONAL {
         return LightSample(-light.direction, FAR, 1.0);
+    }
+    if HAS_AREA_LIGHTS && light.kind >= LIGHT_RECT {
+        var x: vec3<f32>;
+        if light.kind == LIGHT_RECT {
+            x = light.position + uv.x * light.edge1 + uv.y * light.edge2;
+        } else {
+            // Uniform on the sphere: z uniform in [-1, 1], azimuth uniform.
+            let z = 1.0 - 2.0 * uv.x;
+            let r = sqrt(max(0.0, 1.0 - z * z));
+            let phi = 6.283185307 * uv.y;
+            x = light.position + light.radius * vec3<f32>(r * cos(phi), r * sin(phi), z);
+        }
+        let d = x - p;
+        let dist2 = dot(d, d);
+        if dist2 == 0.0 {
+            return LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, 0.0);
+        }
+        let dist = sqrt(dist2);
+        let l = d / dist;
+        var falloff = 1.0 / (dist2 * f32(light.samples));
+        if light.kind == LIGHT_RECT {
+            falloff *= max(0.0, dot(light.direction, -l));
+        }
+        return LightSample(l, dist, falloff);
     }
     let d = light.position - p;
     let dist2 = dot(d, d);

@@ -25,6 +25,11 @@ override USE_BVH: bool = true;
 override TRIANGLE_TEST: u32 = 0u;
 // 0: robust shadow-ray start (shadows.wgsl); > 0: fixed offset along the normal.
 override SHADOW_EPSILON: f32 = 0.0;
+// Sampling (compiled in only for scenes with area lights or several samples
+// per pixel): which sampler, area lights, pixel jitter.
+override SAMPLER: u32 = 0u;
+override HAS_AREA_LIGHTS: bool = true;
+override PIXEL_JITTER: bool = true;
 
 // Mirrored by render::layout::Globals.
 struct Globals {
@@ -48,10 +53,12 @@ struct PushConstants {
     origin: vec2<u32>,
     size: vec2<u32>,
     flags: u32,
-    // Progressive rendering: which pass this is.
+    // Progressive rendering: which pass this is (pass 0 overwrites the
+    // image, later passes add to it; the host divides by the pass count).
     pass_index: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Seed of every random choice.
+    seed: u32,
+    _pad: u32,
 }
 
 const FLAG_WARM_UP: u32 = 1u;
@@ -77,15 +84,26 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
     var shadow_rays = 0u;
     var primary = 0u;
     if px.x < push.size.x && px.y < push.size.y {
-        let ray = primary_ray(globals.camera, px, push.size);
+        let pixel = px.y * push.size.x + px.x;
+        // One sample per pass: the pixel centre, or a stratified point in the
+        // pixel (box filter) when several samples per pixel are asked for.
+        var sub = vec2<f32>(0.5);
+        if PIXEL_JITTER {
+            sub = sample_2d(pixel, 0u, push.pass_index);
+        }
+        let ray = primary_ray(globals.camera, px, push.size, sub);
         let hit = closest_hit(ray);
         var colour = globals.background;
         var alpha = 0.0;
         if hit.found {
-            colour = shade(ray, hit, &shadow_rays);
+            colour = shade(ray, hit, pixel, &shadow_rays);
             alpha = 1.0;
         }
-        image[px.y * push.size.x + px.x] = vec4<f32>(colour, alpha);
+        var value = vec4<f32>(colour, alpha);
+        if push.pass_index > 0u {
+            value += image[pixel];
+        }
+        image[pixel] = value;
         primary = 1u;
     }
     // One global atomic per workgroup instead of one per pixel.

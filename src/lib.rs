@@ -29,5 +29,6 @@ pub mod output;
 pub mod render;
 pub mod scene;
 pub mod vulkan;
+pub mod watch;
 
 pub use error::SceneError;

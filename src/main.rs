@@ -10,7 +10,8 @@ use clap::{Parser, Subcommand};
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::output;
 use penumbra::render::{
-    Accel, KernelOptions, RenderError, Renderer, RendererOptions, ShaderSource, TriangleTest,
+    Accel, KernelOptions, RenderError, Renderer, RendererOptions, Sampler, Sampling, ShaderSource,
+    TriangleTest,
 };
 use penumbra::vulkan::{Context, DeviceSelector};
 
@@ -31,6 +32,44 @@ enum Command {
     Render(RenderArgs),
     /// List the Vulkan devices with their type and driver version.
     Devices,
+    /// Render a scene, then re-render whenever it, a file it references or a
+    /// shader changes (hot reload), until Ctrl-C.
+    Watch(WatchArgs),
+}
+
+#[derive(clap::Args)]
+struct WatchArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Output image, rewritten atomically after every stage (.png or .exr).
+    #[arg(short, long, default_value = "out.png")]
+    output: PathBuf,
+    /// The WGSL directory to watch (default: shaders/ of the source checkout
+    /// if there is one, else the shaders built into the binary, unwatched).
+    #[arg(long)]
+    shaders: Option<PathBuf>,
+    /// Serve a live preview page at ADDR (HOST:PORT or PORT; default
+    /// 127.0.0.1:8737, loopback only unless you name another address).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8737", value_parser = penumbra::watch::server::parse_addr)]
+    serve: Option<std::net::SocketAddr>,
+    /// Image width in pixels (overrides the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: Option<u32>,
+    /// Image height in pixels (overrides the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// The preview renders at 1/N of the resolution before the full image (1: no preview).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    preview: u32,
+    /// Saves closer together than this many milliseconds give one reload.
+    #[arg(long, default_value_t = 30)]
+    debounce_ms: u64,
+    /// Vulkan device: an index from `penumbra devices`, or part of its name.
+    #[arg(long)]
+    device: Option<DeviceSelector>,
+    /// Enable the Khronos validation layer (errors are reported per reload).
+    #[arg(long)]
+    validate: bool,
 }
 
 #[derive(clap::Args)]
@@ -61,6 +100,31 @@ struct RenderArgs {
     /// Ray/triangle test order: `uv-first` (the seminar's) or `t-first`.
     #[arg(long, default_value = "uv-first")]
     triangle_test: TriangleTest,
+    /// Samples per pixel (one pass each): 1 goes through the pixel centre,
+    /// more are stratified over the pixel (box filter).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    spp: u32,
+    /// Light samples per pass for every area light (overrides the scene's `samples`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    area_samples: Option<u32>,
+    /// Seed of the sample pattern: the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Stop after the pass in flight once this many seconds have passed, and
+    /// write the mean of the passes done.
+    #[arg(long, value_parser = parse_seconds)]
+    time_budget: Option<std::time::Duration>,
+    /// Sample placement: `stratified` (low-discrepancy) or `random`.
+    #[arg(long, default_value = "stratified")]
+    sampler: Sampler,
+}
+
+fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
+    let v: f64 = s.parse().map_err(|_| format!("expected a number of seconds, got `{s}`"))?;
+    if !(v > 0.0 && v <= 1e6) {
+        return Err(format!("must be in (0, 1000000] seconds, got {s}"));
+    }
+    Ok(std::time::Duration::from_secs_f64(v))
 }
 
 fn ms(d: std::time::Duration) -> String {
@@ -78,6 +142,11 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         validate,
         accel,
         triangle_test,
+        spp,
+        area_samples,
+        seed,
+        time_budget,
+        sampler,
     } = args;
     // Refuse an unwritable output before spending time on the render.
     output::check_writable(&out)?;
@@ -88,9 +157,16 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("note: {note}");
     }
     let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
+    let mut scene_data = loaded.scene;
+    if let Some(n) = area_samples {
+        for l in &mut scene_data.lights {
+            l.kind.set_samples(n);
+        }
+    }
     let kernel = KernelOptions {
         accel,
         triangle_test,
+        sampler,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&RendererOptions {
@@ -99,7 +175,12 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         shaders,
         kernel,
     })?;
-    let frame = renderer.render(&loaded.scene).map_err(|e| match e {
+    let sampling = Sampling {
+        spp,
+        seed,
+        time_budget,
+    };
+    let frame = render_with_progress(&mut renderer, &scene_data, &sampling).map_err(|e| match e {
         // Device limits name a scene field: say which file.
         RenderError::Scene { field, message } => {
             let field = match (field.as_str(), width.is_some(), height.is_some()) {
@@ -120,11 +201,12 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let t = &s.timings;
     let dev = renderer.device();
     println!(
-        "{} ({}): {}x{}, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s",
+        "{} ({}): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s",
         dev.name,
         dev.device_type,
         frame.image.width,
         frame.image.height,
+        s.passes,
         s.rays(),
         s.primary_rays,
         s.shadow_rays,
@@ -142,6 +224,37 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Uploads and renders in passes, with a progress bar (passes and rays/s)
+/// when there is more than one pass and stderr is a terminal.
+fn render_with_progress(
+    renderer: &mut Renderer,
+    scene: &penumbra::scene::Scene,
+    sampling: &Sampling,
+) -> Result<penumbra::render::Frame, RenderError> {
+    let uploaded = renderer.upload(scene)?;
+    let bar = if sampling.spp > 1 {
+        indicatif::ProgressBar::new(sampling.spp as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} passes, {msg}, eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let (w, h) = uploaded.size();
+    let frame = renderer.render_progressive(&uploaded, w, h, sampling, &mut |p| {
+        bar.set_position(p.done as u64);
+        let rate = p.rays as f64 / p.elapsed.as_secs_f64().max(1e-9) / 1e6;
+        bar.set_message(format!("{rate:.1} Mrays/s"));
+    });
+    bar.finish_and_clear();
+    let mut frame = frame?;
+    let (accel_build, upload) = uploaded.upload_timings();
+    frame.stats.timings.accel_build = accel_build;
+    frame.stats.timings.upload = upload;
+    Ok(frame)
+}
+
 fn devices() -> anyhow::Result<()> {
     let list = Context::list_devices().context("listing Vulkan devices")?;
     for d in list {
@@ -153,11 +266,48 @@ fn devices() -> anyhow::Result<()> {
     Ok(())
 }
 
+fn watch(args: WatchArgs) -> anyhow::Result<()> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let shaders = match args.shaders {
+        Some(dir) => ShaderSource::Directory(dir),
+        None => match penumbra::render::compile::checkout_shader_dir() {
+            Some(dir) => ShaderSource::Directory(dir),
+            None => {
+                eprintln!("note: no shader directory: using the built-in shaders (not watched)");
+                ShaderSource::Embedded
+            }
+        },
+    };
+    let mut opts = penumbra::watch::WatchOptions::new(args.scene, args.output);
+    opts.renderer = RendererOptions {
+        device: args.device,
+        validation: args.validate,
+        shaders,
+        kernel: KernelOptions::default(),
+    };
+    opts.load = LoadOptions {
+        width: args.width,
+        height: args.height,
+    };
+    opts.serve = args.serve;
+    opts.preview_divisor = args.preview;
+    opts.debounce = std::time::Duration::from_millis(args.debounce_ms);
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
+            .context("installing the Ctrl-C handler")?;
+    }
+    penumbra::watch::run_printing(&opts, stop)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Devices => devices(),
+        Command::Watch(args) => watch(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

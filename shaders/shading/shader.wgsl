@@ -37,30 +37,38 @@ fn resolve_shader(id: u32, p: vec3<f32>, n: vec3<f32>) -> ShaderNode {
 
 // The seminar's sum over lights at a hit:
 // k_a·I_a + [visible]·(k_d·I_d·max(0, l·n) + k_s·I_s·lobe), lobe zero where l·n <= 0.
-fn shade(ray: Ray, hit: Hit, shadow_rays: ptr<function, u32>) -> vec3<f32> {
+fn shade(ray: Ray, hit: Hit, pixel: u32, shadow_rays: ptr<function, u32>) -> vec3<f32> {
     let node = resolve_shader(hit.shader, hit.position, hit.geometric_normal);
     let n = hit.shading_normal;
     let v = -ray.dir;
     var colour = vec3<f32>(0.0);
     for (var i = 0u; i < globals.num_lights; i++) {
         let light = lights[i];
+        // The ambient term counts once per light, also for area lights.
         colour += node.ambient * light.ambient;
-        let ls = sample_light(light, hit.position);
-        let ln = dot(ls.to_light, n);
-        if ln <= 0.0 || ls.falloff <= 0.0 {
-            continue;
+        let count = light_sample_count(light);
+        for (var j = 0u; j < count; j++) {
+            var uv = vec2<f32>(0.5);
+            if HAS_AREA_LIGHTS {
+                uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
+            }
+            let ls = sample_light(light, hit.position, uv);
+            let ln = dot(ls.to_light, n);
+            if ln <= 0.0 || ls.falloff <= 0.0 {
+                continue;
+            }
+            *shadow_rays += 1u;
+            if occluded(hit, ls) {
+                continue;
+            }
+            var lobe = 0.0;
+            if HAS_BLINN_PHONG && node.kind == SHADER_BLINN_PHONG {
+                lobe = blinn_phong_lobe(n, ls.to_light, v, node.shininess);
+            } else if HAS_PHONG {
+                lobe = phong_lobe(n, ls.to_light, v, node.shininess);
+            }
+            colour += ls.falloff * (node.diffuse * light.diffuse * ln + node.specular * light.specular * lobe);
         }
-        *shadow_rays += 1u;
-        if occluded(hit, ls) {
-            continue;
-        }
-        var lobe = 0.0;
-        if HAS_BLINN_PHONG && node.kind == SHADER_BLINN_PHONG {
-            lobe = blinn_phong_lobe(n, ls.to_light, v, node.shininess);
-        } else if HAS_PHONG {
-            lobe = phong_lobe(n, ls.to_light, v, node.shininess);
-        }
-        colour += ls.falloff * (node.diffuse * light.diffuse * ln + node.specular * light.specular * lobe);
     }
     return colour;
 }

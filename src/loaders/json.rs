@@ -15,7 +15,11 @@ use crate::scene::{
     Camera, Checker, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, ShaderId,
     Shape, Sphere, Triangle,
 };
+use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::SceneError;
+
+/// Light samples per pass of an area light without a `samples` field.
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 
 type V3 = [f64; 3];
 type C3 = [f32; 3];
@@ -129,6 +133,8 @@ enum LightType {
     Directional,
     Point,
     Spot,
+    Rect,
+    Sphere,
 }
 
 #[derive(Deserialize)]
@@ -140,6 +146,12 @@ struct LightFile {
     direction: Option<V3>,
     inner_angle: Option<f64>,
     outer_angle: Option<f64>,
+    corner: Option<V3>,
+    edge1: Option<V3>,
+    edge2: Option<V3>,
+    center: Option<V3>,
+    radius: Option<f64>,
+    samples: Option<u32>,
     intensity: Option<f32>,
     ambient: Option<C3>,
     diffuse: Option<C3>,
@@ -420,7 +432,10 @@ impl Reader<'_> {
             LightType::Directional => ("a directional light", false, true, false),
             LightType::Point => ("a point light", true, false, false),
             LightType::Spot => ("a spot light", true, true, true),
+            LightType::Rect => ("a rect light", false, false, false),
+            LightType::Sphere => ("a sphere light", false, false, false),
         };
+        let (rect, sphere) = (l.kind == LightType::Rect, l.kind == LightType::Sphere);
         fields_for(
             self.file,
             &at,
@@ -430,8 +445,26 @@ impl Reader<'_> {
                 ("direction", l.direction.is_some(), needs_dir),
                 ("inner_angle", l.inner_angle.is_some(), spot),
                 ("outer_angle", l.outer_angle.is_some(), spot),
+                ("corner", l.corner.is_some(), rect),
+                ("edge1", l.edge1.is_some(), rect),
+                ("edge2", l.edge2.is_some(), rect),
+                ("center", l.center.is_some(), sphere),
+                ("radius", l.radius.is_some(), sphere),
             ],
         )?;
+        if l.samples.is_some() && !(rect || sphere) {
+            return Err(self.err(f("samples"), format!("not a field of {kind_name}")));
+        }
+        let samples = || {
+            let n = l.samples.unwrap_or(DEFAULT_LIGHT_SAMPLES);
+            if n == 0 || n > MAX_LIGHT_SAMPLES {
+                return Err(self.err(
+                    f("samples"),
+                    format!("must be in 1..={MAX_LIGHT_SAMPLES}, got {n}"),
+                ));
+            }
+            Ok(n)
+        };
         let pos = || self.finite(&f("position"), l.position.unwrap_or_default());
         let dir = || self.direction(&f("direction"), l.direction.unwrap_or_default());
         let kind = match l.kind {
@@ -459,6 +492,30 @@ impl Reader<'_> {
                     direction: dir()?,
                     inner_angle: inner.to_radians(),
                     outer_angle: outer.to_radians(),
+                }
+            }
+            LightType::Rect => {
+                let corner = self.finite(&f("corner"), l.corner.unwrap_or_default())?;
+                let edge1 = self.finite(&f("edge1"), l.edge1.unwrap_or_default())?;
+                let edge2 = self.finite(&f("edge2"), l.edge2.unwrap_or_default())?;
+                let scale = edge1.length_squared().max(edge2.length_squared());
+                if !(edge1.cross(edge2).length() > 1e-12 * scale) {
+                    return Err(self.err(
+                        f("edge2"),
+                        "the rectangle has zero area (an edge is zero or the edges are parallel)",
+                    ));
+                }
+                LightKind::Rect { corner, edge1, edge2, samples: samples()? }
+            }
+            LightType::Sphere => {
+                let radius = l.radius.unwrap_or_default();
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(self.err(f("radius"), format!("must be positive, got {radius}")));
+                }
+                LightKind::Sphere {
+                    center: self.finite(&f("center"), l.center.unwrap_or_default())?,
+                    radius,
+                    samples: samples()?,
                 }
             }
         };

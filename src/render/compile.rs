@@ -27,6 +27,7 @@ pub const SHADER_FILES: &[&str] = &[
     "shading/checker.wgsl",
     "shadows.wgsl",
     "bvh.wgsl",
+    "sampling.wgsl",
 ];
 
 /// The files built into the binary, so an installed `penumbra` needs no
@@ -46,6 +47,7 @@ const EMBEDDED: &[&str] = &[
     include_str!("../../shaders/shading/checker.wgsl"),
     include_str!("../../shaders/shadows.wgsl"),
     include_str!("../../shaders/bvh.wgsl"),
+    include_str!("../../shaders/sampling.wgsl"),
 ];
 
 /// The compute kernel's entry point.
@@ -172,6 +174,9 @@ impl Assembled {
             .map_err(|e| self.error_at(e.location(&self.text), format!("{}", e.as_inner())))?;
         let mut constants = naga::back::PipelineConstants::default();
         for (name, on) in override_values(features) {
+            // The general kernel compiles in every scene feature; pixel
+            // jitter is a render setting (it changes the image), not one.
+            let on = on || (!kernel.specialise && name != "PIXEL_JITTER");
             constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
         }
         let bvh = kernel.accel == Accel::Bvh;
@@ -182,6 +187,7 @@ impl Assembled {
             ShadowOffset::Fixed(e) => e as f64,
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
+        constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             &module,
             &info,
@@ -251,8 +257,30 @@ impl std::hash::Hash for ShadowOffset {
     }
 }
 
-/// Kernel variants a user chooses (as opposed to features a scene implies).
+/// How samples (pixel jitter, area-light points) are placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Sampler {
+    /// The R2 low-discrepancy sequence with a per-pixel random shift
+    /// (stratified; the default).
+    #[default]
+    Stratified = 0,
+    /// Independent uniform random samples (for comparison).
+    Random = 1,
+}
+
+impl std::str::FromStr for Sampler {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "stratified" => Ok(Sampler::Stratified),
+            "random" => Ok(Sampler::Random),
+            _ => Err(format!("expected `stratified` or `random`, got `{s}`")),
+        }
+    }
+}
+
+/// Kernel variants a user chooses (as opposed to features a scene implies).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct KernelOptions {
     /// BVH or brute force.
     pub accel: Accel,
@@ -260,6 +288,25 @@ pub struct KernelOptions {
     pub triangle_test: TriangleTest,
     /// Where shadow rays start.
     pub shadow_offset: ShadowOffset,
+    /// How samples are placed (scenes with area lights or several samples
+    /// per pixel).
+    pub sampler: Sampler,
+    /// Compile only the features the scene uses (true, the default), or the
+    /// general kernel with every feature override on (false: the baseline
+    /// the benchmark measures specialisation against).
+    pub specialise: bool,
+}
+
+impl Default for KernelOptions {
+    fn default() -> Self {
+        KernelOptions {
+            accel: Accel::default(),
+            triangle_test: TriangleTest::default(),
+            shadow_offset: ShadowOffset::default(),
+            sampler: Sampler::default(),
+            specialise: true,
+        }
+    }
 }
 
 impl std::str::FromStr for Accel {
@@ -285,7 +332,7 @@ impl std::str::FromStr for TriangleTest {
 }
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 10] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 12] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -297,6 +344,8 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 10] {
         ("HAS_PHONG", f.phong),
         ("HAS_BLINN_PHONG", f.blinn_phong),
         ("HAS_CHECKER", f.checker),
+        ("HAS_AREA_LIGHTS", f.area_lights),
+        ("PIXEL_JITTER", f.pixel_jitter),
     ]
 }
 
@@ -343,6 +392,8 @@ mod tests {
             phong: true,
             blinn_phong: true,
             checker: true,
+            area_lights: true,
+            pixel_jitter: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [TriangleTest::UvFirst, TriangleTest::TFirst] {
@@ -350,6 +401,7 @@ mod tests {
                     accel,
                     triangle_test,
                     shadow_offset: ShadowOffset::Fixed(1e-4),
+                    ..Default::default()
                 };
                 let words = src.compile(&all, &kernel).unwrap();
                 assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");

@@ -53,8 +53,8 @@ pub struct PushConstants {
     pub size: [u32; 2],
     pub flags: u32,
     pub pass_index: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    pub seed: u32,
+    pub _pad: u32,
 }
 
 /// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
@@ -116,8 +116,12 @@ pub struct Light {
     pub ambient: [f32; 3],
     pub cone_offset: f32,
     pub diffuse: [f32; 3],
-    pub _pad0: u32,
+    pub samples: u32,
     pub specular: [f32; 3],
+    pub radius: f32,
+    pub edge1: [f32; 3],
+    pub _pad0: u32,
+    pub edge2: [f32; 3],
     pub _pad1: u32,
 }
 
@@ -163,6 +167,10 @@ pub const LIGHT_DIRECTIONAL: u32 = 0;
 pub const LIGHT_POINT: u32 = 1;
 /// Spot light kind.
 pub const LIGHT_SPOT: u32 = 2;
+/// Rectangular area light kind.
+pub const LIGHT_RECT: u32 = 3;
+/// Sphere area light kind.
+pub const LIGHT_SPHERE: u32 = 4;
 
 /// A scene laid out for the GPU.
 #[derive(Clone, Debug, Default)]
@@ -261,6 +269,7 @@ impl GpuScene {
                 ambient: c3(l.ambient),
                 diffuse: scale(l.diffuse),
                 specular: scale(l.specular),
+                samples: 1,
                 ..Default::default()
             };
             match l.kind {
@@ -286,6 +295,20 @@ impl GpuScene {
                     gl.direction = f3(direction);
                     gl.cone_scale = s as f32;
                     gl.cone_offset = (-co * s) as f32;
+                }
+                LightKind::Rect { corner, edge1, edge2, samples } => {
+                    gl.kind = LIGHT_RECT;
+                    gl.position = f3(corner - eye);
+                    gl.edge1 = f3(edge1);
+                    gl.edge2 = f3(edge2);
+                    gl.direction = f3(edge1.cross(edge2).normalize());
+                    gl.samples = samples;
+                }
+                LightKind::Sphere { center, radius, samples } => {
+                    gl.kind = LIGHT_SPHERE;
+                    gl.position = f3(center - eye);
+                    gl.radius = radius as f32;
+                    gl.samples = samples;
                 }
             }
             g.lights.push(gl);
@@ -461,7 +484,7 @@ mod tests {
             layout!(
                 "PushConstants",
                 PushConstants,
-                [origin, size, flags, pass_index, _pad0, _pad1]
+                [origin, size, flags, pass_index, seed, _pad]
             ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
@@ -478,8 +501,12 @@ mod tests {
                     ambient,
                     cone_offset,
                     diffuse,
-                    _pad0,
+                    samples,
                     specular,
+                    radius,
+                    edge1,
+                    _pad0,
+                    edge2,
                     _pad1
                 ]
             ),

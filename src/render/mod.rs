@@ -4,6 +4,7 @@
 
 pub mod compile;
 pub mod layout;
+mod reload;
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -15,7 +16,9 @@ use crate::vulkan::{
     BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
     DeviceSelector, VulkanError,
 };
-pub use compile::{Accel, CompileError, KernelOptions, ShaderSource, ShadowOffset, TriangleTest};
+pub use compile::{
+    Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
+};
 use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
@@ -126,6 +129,8 @@ pub struct RenderStats {
     pub shadow_rays: u64,
     /// Time per phase.
     pub timings: Timings,
+    /// Passes (samples per pixel) rendered.
+    pub passes: u32,
     /// BVH nodes (0 for brute force).
     pub bvh_nodes: usize,
     /// BVH depth (root = 0).
@@ -153,6 +158,45 @@ pub struct Frame {
     pub image: Image,
     /// Rays and timings.
     pub stats: RenderStats,
+}
+
+/// Most samples per pixel.
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// How many samples per pixel, and when to stop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    /// Samples per pixel, one per pass, in 1..=[`MAX_SPP`]. One sample goes
+    /// through the pixel centre; more are stratified over the pixel (box
+    /// filter).
+    pub spp: u32,
+    /// Seed of every random choice: the same seed gives the same image.
+    pub seed: u32,
+    /// Stop after the pass in flight once this much time has passed.
+    pub time_budget: Option<Duration>,
+}
+
+impl Default for Sampling {
+    fn default() -> Self {
+        Sampling {
+            spp: 1,
+            seed: 0,
+            time_budget: None,
+        }
+    }
+}
+
+/// Progress of a progressive render.
+#[derive(Clone, Copy, Debug)]
+pub struct PassInfo {
+    /// Passes done.
+    pub done: u32,
+    /// Passes planned.
+    pub total: u32,
+    /// Rays traced so far.
+    pub rays: u64,
+    /// Time since the first pass started.
+    pub elapsed: Duration,
 }
 
 /// A scene laid out and uploaded to the device, ready to render.
@@ -368,13 +412,29 @@ impl Renderer {
     }
 
     /// Renders an uploaded scene at `width`×`height` pixels (at most the
-    /// scene's size; smaller sizes keep the field of view: previews). Compiles
-    /// the kernel first if the cache does not have it.
+    /// scene's size; smaller sizes keep the field of view: previews), one
+    /// sample per pixel through its centre. Compiles the kernel first if the
+    /// cache does not have it.
     pub fn render_uploaded(
         &mut self,
         scene: &UploadedScene,
         width: u32,
         height: u32,
+    ) -> Result<Frame, RenderError> {
+        self.render_progressive(scene, width, height, &Sampling::default(), &mut |_| {})
+    }
+
+    /// Renders an uploaded scene in passes of one sample per pixel each,
+    /// accumulating in a float buffer, until `sampling.spp` passes are done
+    /// or the time budget is spent (the pass in flight is finished). Calls
+    /// `on_pass` after every pass. The image is the mean of the passes done.
+    pub fn render_progressive(
+        &mut self,
+        scene: &UploadedScene,
+        width: u32,
+        height: u32,
+        sampling: &Sampling,
+        on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
         if width == 0 || height == 0 || width > scene.width || height > scene.height {
             return Err(RenderError::Scene {
@@ -385,34 +445,74 @@ impl Renderer {
                 ),
             });
         }
+        if sampling.spp == 0 || sampling.spp > MAX_SPP {
+            return Err(RenderError::Scene {
+                field: "--spp".into(),
+                message: format!("must be in 1..={MAX_SPP}, got {}", sampling.spp),
+            });
+        }
+        // Pixel jitter is compiled in only when there is more than one sample.
+        let features = Features {
+            pixel_jitter: sampling.spp > 1,
+            ..scene.features
+        };
         // The BVH buffers are empty for a scene uploaded for brute force.
         let key_kernel = KernelOptions {
             accel: scene.kernel.accel,
             ..self.kernel
         };
         let saved = std::mem::replace(&mut self.kernel, key_kernel);
-        let compiled = self.pipeline(scene.features);
+        let compiled = self.pipeline(features);
         self.kernel = saved;
         let (shader_compile, pipeline_creation, driver_compile) = compiled?;
         let ctx = &self.context;
-        // Zero the ray counters of any earlier render of this upload.
         let refs: Vec<_> = scene.buffers.iter().collect();
-        let pipeline = &self.pipelines[&(scene.features, key_kernel)];
-        let push = PushConstants {
-            size: [width, height],
-            ..Zeroable::zeroed()
-        };
-        let counters_before: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&ctx.read_buffer(&scene.buffers[8])?[..8]);
+        let pipeline = &self.pipelines[&(features, key_kernel)];
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
-        let render = ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+        let read_counters = || -> Result<[u32; 2], RenderError> {
+            let bytes = ctx.read_buffer(&scene.buffers[8])?;
+            Ok([0, 1].map(|i| u32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default())))
+        };
+        // The counters wrap; per-pass differences in u64 do not.
+        let mut before = read_counters()?;
+        let (mut primary_rays, mut shadow_rays) = (0u64, 0u64);
+        let mut render = Duration::ZERO;
+        let start = Instant::now();
+        let mut passes = 0;
+        while passes < sampling.spp {
+            let push = PushConstants {
+                size: [width, height],
+                pass_index: passes,
+                seed: sampling.seed,
+                ..Zeroable::zeroed()
+            };
+            render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+            let after = read_counters()?;
+            primary_rays += after[0].wrapping_sub(before[0]) as u64;
+            shadow_rays += after[1].wrapping_sub(before[1]) as u64;
+            before = after;
+            passes += 1;
+            on_pass(&PassInfo {
+                done: passes,
+                total: sampling.spp,
+                rays: primary_rays + shadow_rays,
+                elapsed: start.elapsed(),
+            });
+            if sampling.time_budget.is_some_and(|b| start.elapsed() >= b) {
+                break;
+            }
+        }
 
         let t1 = Instant::now();
         let image_bytes = ctx.read_buffer(&scene.buffers[7])?;
-        let counter_bytes = ctx.read_buffer(&scene.buffers[8])?;
         let n = width as usize * height as usize;
-        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]);
-        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&counter_bytes[..8]);
+        let mut pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]);
+        if passes > 1 {
+            let inv = 1.0 / passes as f32;
+            for p in &mut pixels {
+                *p = p.map(|c| c * inv);
+            }
+        }
         let readback = t1.elapsed();
         ctx.check_validation()?;
 
@@ -423,8 +523,9 @@ impl Renderer {
                 pixels,
             },
             stats: RenderStats {
-                primary_rays: counters[0].wrapping_sub(counters_before[0]) as u64,
-                shadow_rays: counters[1].wrapping_sub(counters_before[1]) as u64,
+                primary_rays,
+                shadow_rays,
+                passes,
                 bvh_nodes: scene.bvh_nodes,
                 bvh_depth: scene.bvh_depth,
                 bvh_bytes: scene.bvh_bytes,

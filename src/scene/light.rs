@@ -1,6 +1,13 @@
-//! Lights: directional, point and spot, each with an intensity and the three
-//! colours of the Phong model. The diffuse and specular colours are scaled by
-//! the intensity (and by the falloff); the ambient colour is not.
+//! Lights: directional, point and spot, and the area lights (rectangle and
+//! sphere), each with an intensity and the three colours of the Phong model.
+//! The diffuse and specular colours are scaled by the intensity (and by the
+//! falloff); the ambient colour is not.
+//!
+//! An area light of intensity `I` is the limit of N → ∞ point lights of
+//! intensity `I/N` spread uniformly over its surface, for the rectangle each
+//! weighted by the emitter's cosine `max(0, n_light · (−l))`. The renderer
+//! takes `samples` of them per pass (stratified, each with its own shadow
+//! ray); the ambient term is counted once per light, not per sample.
 
 use glam::{DVec3, Vec3};
 
@@ -34,7 +41,32 @@ pub enum LightKind {
         /// outer ≤ π/2.
         outer_angle: f64,
     },
+    /// One-sided rectangle `corner + s·edge1 + t·edge2` (s, t in [0, 1]),
+    /// emitting on the side of `edge1 × edge2`.
+    Rect {
+        /// One corner.
+        corner: DVec3,
+        /// First edge from the corner.
+        edge1: DVec3,
+        /// Second edge from the corner.
+        edge2: DVec3,
+        /// Light samples per pass, in 1..=[`MAX_LIGHT_SAMPLES`].
+        samples: u32,
+    },
+    /// Sphere of point lights (emitting in all directions, no emitter
+    /// cosine; the light is not an occluder).
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius, > 0.
+        radius: f64,
+        /// Light samples per pass, in 1..=[`MAX_LIGHT_SAMPLES`].
+        samples: u32,
+    },
 }
+
+/// Most light samples per area light and pass.
+pub const MAX_LIGHT_SAMPLES: u32 = 4096;
 
 /// A light of the Phong model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +84,18 @@ pub struct Light {
 }
 
 impl LightKind {
+    /// Whether this is an area light (sampled).
+    pub fn is_area(&self) -> bool {
+        matches!(self, LightKind::Rect { .. } | LightKind::Sphere { .. })
+    }
+
+    /// Overrides the sample count of an area light (no effect on others).
+    pub fn set_samples(&mut self, n: u32) {
+        if let LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } = self {
+            *samples = n;
+        }
+    }
+
     /// The KHR_lights_punctual cone attenuation for a spot light at
     /// `cos_angle` = cos of the angle between the cone axis and the direction
     /// from the light to the point: smoothstep-like

@@ -12,7 +12,7 @@ pub mod shading;
 mod validate;
 
 pub use camera::{Camera, Projection};
-pub use light::{Light, LightKind};
+pub use light::{Light, LightKind, MAX_LIGHT_SAMPLES};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
 pub use shading::{Checker, Phong, Shader, ShaderId};
 pub use validate::{Invalid, MAX_IMAGE_SIDE};
@@ -75,6 +75,11 @@ pub struct Features {
     pub point_lights: bool,
     /// A spot light.
     pub spot_lights: bool,
+    /// An area light (rectangle or sphere): light sampling is compiled in.
+    pub area_lights: bool,
+    /// Several samples per pixel: pixel jitter is compiled in. Not a property
+    /// of the scene: the renderer sets it from the sample count.
+    pub pixel_jitter: bool,
     /// A Phong shader is reachable.
     pub phong: bool,
     /// A Blinn-Phong shader is reachable.
@@ -112,6 +117,7 @@ impl Scene {
                 LightKind::Directional { .. } => f.directional_lights = true,
                 LightKind::Point { .. } => f.point_lights = true,
                 LightKind::Spot { .. } => f.spot_lights = true,
+                LightKind::Rect { .. } | LightKind::Sphere { .. } => f.area_lights = true,
             }
         }
         let mut seen = vec![false; self.shaders.len()];

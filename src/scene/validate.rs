@@ -67,6 +67,14 @@ fn colour(field: &str, c: Vec3) -> Result<(), Invalid> {
     Ok(())
 }
 
+fn samples_ok(field: &str, n: u32) -> Result<(), Invalid> {
+    let max = super::MAX_LIGHT_SAMPLES;
+    if n == 0 || n > max {
+        return Err(Invalid::new(field, format!("must be in 1..={max}, got {n}")));
+    }
+    Ok(())
+}
+
 pub(super) fn camera(c: &Camera) -> Result<(), Invalid> {
     finite3("camera.position", c.position)?;
     let o = c.orientation;
@@ -264,6 +272,26 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                         ),
                     ));
                 }
+            }
+            LightKind::Rect { corner, edge1, edge2, samples } => {
+                finite3(&f("corner"), corner)?;
+                finite3(&f("edge1"), edge1)?;
+                finite3(&f("edge2"), edge2)?;
+                let area = edge1.cross(edge2).length();
+                if !(area > 1e-12 * edge1.length_squared().max(edge2.length_squared())) {
+                    return Err(Invalid::new(
+                        f("edge2"),
+                        "the rectangle has zero area (an edge is zero or the edges are parallel)",
+                    ));
+                }
+                samples_ok(&f("samples"), samples)?;
+            }
+            LightKind::Sphere { center, radius, samples } => {
+                finite3(&f("center"), center)?;
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(Invalid::new(f("radius"), format!("must be positive, got {radius}")));
+                }
+                samples_ok(&f("samples"), samples)?;
             }
         }
     }

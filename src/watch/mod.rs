@@ -1,0 +1,441 @@
+//! `penumbra watch`: shader and scene hot reload.
+//!
+//! The loop ([`run`]) watches the scene file, every file it read, and the
+//! shader sources ([`files`]); waits for a debounced batch of changes;
+//! rebuilds only what changed ([`stage::Session::apply`]: a shader edit
+//! recompiles the kernel and keeps the scene upload, a scene edit re-uploads
+//! and keeps the kernel unless the scene's features change); renders a
+//! quarter-resolution preview and then the full image, writing the output
+//! atomically after each ([`stage::Session::render_stages`]); and reports
+//! each reload as an [`Event`]. Errors (a broken shader or scene, a failed
+//! render) are reported and the last good kernel, upload and image kept.
+//! With a server address, the latest image, error and timing line are also
+//! published to a live page ([`server`]).
+//!
+//! Cancellation is per stage: a change that arrives while the preview
+//! renders skips the full-resolution stage; a stage already running is not
+//! interrupted.
+
+pub mod files;
+pub mod server;
+pub mod stage;
+
+use std::io::Write as _;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::Sender;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use crate::loaders::LoadOptions;
+use crate::output::{self, Format};
+use crate::render::compile::SHADER_FILES;
+use crate::render::{Renderer, RendererOptions, ShaderSource};
+use files::{normalise, FileWatcher, WatchSet};
+use stage::{Changes, CompileTimes, Session, StageFrame};
+
+/// How to run the loop.
+#[derive(Clone, Debug)]
+pub struct WatchOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The output image (.png or .exr), rewritten after every stage.
+    pub output: PathBuf,
+    /// The renderer: device, validation, kernel variant, and where the WGSL
+    /// comes from (a directory is watched; embedded shaders are not).
+    pub renderer: RendererOptions,
+    /// Image size overrides.
+    pub load: LoadOptions,
+    /// Serve the live page here.
+    pub serve: Option<SocketAddr>,
+    /// The preview's resolution divisor (1: no preview stage).
+    pub preview_divisor: u32,
+    /// A burst of saves closer together than this gives one reload.
+    pub debounce: Duration,
+}
+
+impl WatchOptions {
+    /// Defaults: a 1/4-resolution preview, a 30 ms debounce window, no
+    /// server, embedded shaders.
+    pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> WatchOptions {
+        WatchOptions {
+            scene: scene.into(),
+            output: output.into(),
+            renderer: RendererOptions::default(),
+            load: LoadOptions::default(),
+            serve: None,
+            preview_divisor: 4,
+            debounce: Duration::from_millis(30),
+        }
+    }
+}
+
+/// One written stage of a reload.
+#[derive(Clone, Debug)]
+pub struct StageReport {
+    /// The stage's render size (the file holds it scaled up to the full size).
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Kernel compile time spent in this stage (zero when cached).
+    pub compile: CompileTimes,
+    /// The render dispatch and readback.
+    pub render: Duration,
+    /// Encoding the image (PNG or EXR).
+    pub encode: Duration,
+    /// Writing and renaming the file.
+    pub write: Duration,
+    /// From the first file event (or the start) to the image on disk.
+    pub latency: Duration,
+    /// When the image was on disk.
+    pub written_at: Instant,
+}
+
+/// What one reload did.
+#[derive(Clone, Debug)]
+pub struct Reload {
+    /// 0 for the first render at start-up, then 1, 2, …
+    pub number: u64,
+    /// The files whose change triggered it (empty at start-up).
+    pub changed: Vec<PathBuf>,
+    /// What changed.
+    pub changes: Changes,
+    /// Kernel recompile after a shader edit.
+    pub compile: Option<CompileTimes>,
+    /// Loading and uploading the scene after a scene edit.
+    pub upload: Option<Duration>,
+    /// The stages written, preview first.
+    pub stages: Vec<StageReport>,
+    /// A newer edit cancelled the refinement.
+    pub cancelled: bool,
+    /// Errors: each names the file (and for shaders `file:line:col`, the
+    /// source line and a caret). The output keeps the last good image.
+    pub errors: Vec<String>,
+    /// The one-line summary printed for this reload.
+    pub line: String,
+}
+
+/// What the loop reports.
+#[derive(Clone, Debug)]
+pub enum Event {
+    /// The watcher is armed: edits from now on are seen.
+    Watching {
+        /// The watched files.
+        files: Vec<PathBuf>,
+    },
+    /// The live page is up.
+    Serving {
+        /// Its URL.
+        url: String,
+    },
+    /// A reload finished (or failed).
+    Reload(Reload),
+}
+
+impl Event {
+    /// Prints the event as `penumbra watch` does: errors to stderr, one line
+    /// per reload to stdout.
+    pub fn print(&self) {
+        match self {
+            Event::Watching { files } => {
+                println!("watching {} files (Ctrl-C to stop)", files.len())
+            }
+            Event::Serving { url } => println!("serving the live preview at {url}"),
+            Event::Reload(r) => {
+                let mut err = std::io::stderr().lock();
+                for e in &r.errors {
+                    let _ = writeln!(err, "error: {e}");
+                }
+                drop(err);
+                println!("{}", r.line);
+            }
+        }
+        let _ = std::io::stdout().flush();
+    }
+}
+
+fn ms(d: Duration) -> String {
+    format!("{:.1} ms", d.as_secs_f64() * 1e3)
+}
+
+/// The loop: renders once, then reloads on every change until `stop` is
+/// set, sending an [`Event`] per reload. Returns an error only when it cannot
+/// start (no Vulkan device, unwritable output, address in use, no watcher);
+/// broken files and failed renders are reported and survived.
+pub fn run(opts: &WatchOptions, stop: Arc<AtomicBool>, events: Sender<Event>) -> anyhow::Result<()> {
+    let format = output::check_writable(&opts.output)?;
+    let scene_path = normalise(&opts.scene);
+    let shader_dir = match &opts.renderer.shaders {
+        ShaderSource::Directory(d) => Some(d.canonicalize().map_err(|e| {
+            anyhow::anyhow!("--shaders {}: {e}", d.display())
+        })?),
+        ShaderSource::Embedded => None,
+    };
+    let mut ropts = opts.renderer.clone();
+    if let Some(d) = &shader_dir {
+        ropts.shaders = ShaderSource::Directory(d.clone());
+    }
+    let renderer = Renderer::new(&ropts)?;
+    let mut session = Session::new(renderer, &scene_path, opts.load.clone());
+
+    let shader_files: Vec<PathBuf> = match &shader_dir {
+        Some(d) => SHADER_FILES.iter().map(|f| normalise(&d.join(f))).collect(),
+        None => Vec::new(),
+    };
+    let watch_set = |scene_files: &[PathBuf]| WatchSet {
+        scene: scene_files.iter().map(|p| normalise(p)).collect(),
+        shaders: shader_files.iter().cloned().collect(),
+    };
+    let mut watcher = FileWatcher::new(watch_set(session.scene_files()), opts.debounce)?;
+
+    let live = Arc::new(server::Live::default());
+    let _server = match opts.serve {
+        Some(addr) => {
+            let s = server::Server::start(addr, live.clone())?;
+            let _ = events.send(Event::Serving {
+                url: format!("http://{}/", s.addr),
+            });
+            Some(s)
+        }
+        None => None,
+    };
+
+    let mut out = Output {
+        path: opts.output.clone(),
+        format,
+        live: opts.serve.map(|_| live.clone()),
+    };
+    let divisors: Vec<u32> = if opts.preview_divisor > 1 {
+        vec![opts.preview_divisor, 1]
+    } else {
+        vec![1]
+    };
+    let describe = |p: &Path| -> String {
+        shader_dir
+            .as_ref()
+            .and_then(|d| p.strip_prefix(d).ok())
+            .or_else(|| p.file_name().map(Path::new))
+            .unwrap_or(p)
+            .display()
+            .to_string()
+    };
+
+    // The first render, then one reload per batch of changes.
+    let mut number = 0u64;
+    let mut batch = Some(files::Batch {
+        first_event: Instant::now(),
+        last_event: Instant::now(),
+        paths: Default::default(),
+    });
+    let mut announced = false;
+    while let Some(b) = batch {
+        let changes = if number == 0 {
+            Changes {
+                shaders: true,
+                scene: true,
+            }
+        } else {
+            Changes {
+                shaders: b.paths.iter().any(|p| watcher.set().shaders.contains(p)),
+                scene: b.paths.iter().any(|p| watcher.set().scene.contains(p)),
+            }
+        };
+        let applied = session.apply(changes);
+        // The scene may now reference other files.
+        let new_set = watch_set(session.scene_files());
+        if &new_set != watcher.set() {
+            if let Err(e) = watcher.update(new_set) {
+                eprintln!("warning: cannot watch every scene file: {e}");
+            }
+        }
+        if !announced {
+            let set = watcher.set();
+            let _ = events.send(Event::Watching {
+                files: set.scene.iter().chain(&set.shaders).cloned().collect(),
+            });
+            announced = true;
+        }
+
+        let mut errors = applied.errors;
+        let mut stages = Vec::new();
+        let mut cancelled = false;
+        if applied.render {
+            let full = session.size().unwrap_or((1, 1));
+            let mut write_errors = Vec::new();
+            let rendered = session.render_stages(
+                &divisors,
+                || watcher.pending(),
+                |frame: StageFrame| match out.write(&frame, full) {
+                    Ok((encode, write)) => {
+                        let written_at = Instant::now();
+                        stages.push(StageReport {
+                            width: frame.image.width,
+                            height: frame.image.height,
+                            compile: frame.compile,
+                            render: frame.render,
+                            encode,
+                            write,
+                            latency: written_at - b.first_event,
+                            written_at,
+                        });
+                    }
+                    Err(e) => write_errors.push(e),
+                },
+            );
+            match rendered {
+                Ok(c) => cancelled = c,
+                Err(e) => {
+                    if !errors.contains(&e) {
+                        errors.push(e)
+                    }
+                }
+            }
+            errors.extend(write_errors);
+        }
+
+        // The one line.
+        let what = if number == 0 {
+            "start".to_string()
+        } else {
+            let mut kinds = Vec::new();
+            if changes.shaders {
+                kinds.push("shaders");
+            }
+            if changes.scene {
+                kinds.push("scene");
+            }
+            let names: Vec<String> = b.paths.iter().map(|p| describe(p)).collect();
+            format!("{} ({})", kinds.join("+"), names.join(", "))
+        };
+        let mut parts = vec![format!("reload {number}: {what}")];
+        let compile = applied.compile.or_else(|| {
+            stages
+                .iter()
+                .map(|s| s.compile)
+                .find(|c| c.total() > Duration::ZERO)
+        });
+        if let Some(c) = compile {
+            parts.push(format!(
+                "compile {} (naga {}, pipeline {}, driver {})",
+                ms(c.total()),
+                ms(c.naga),
+                ms(c.pipeline),
+                ms(c.driver)
+            ));
+        } else if applied.render {
+            parts.push("kernel kept".into());
+        }
+        if let Some(u) = applied.upload {
+            parts.push(format!("load+upload {}", ms(u)));
+        }
+        for (i, s) in stages.iter().enumerate() {
+            let name = if divisors[i] > 1 { "preview" } else { "full" };
+            parts.push(format!(
+                "{name} {}x{}: render {}, encode+write {}, latency {}",
+                s.width,
+                s.height,
+                ms(s.render),
+                ms(s.encode + s.write),
+                ms(s.latency)
+            ));
+        }
+        if cancelled {
+            parts.push("refinement cancelled by a newer edit".into());
+        }
+        if !errors.is_empty() {
+            parts.push(if stages.is_empty() {
+                "ERROR: kept the last good image".into()
+            } else {
+                "ERROR: see above".into()
+            });
+        }
+        let line = parts.join(" | ");
+        if let Some(live) = &out.live {
+            let current = session
+                .scene_error
+                .iter()
+                .chain(&session.shader_error)
+                .cloned()
+                .chain(errors.iter().filter(|e| e.starts_with("render error")).cloned())
+                .collect::<Vec<_>>();
+            let current = (!current.is_empty()).then(|| current.join("\n\n"));
+            live.set_status(current, line.clone());
+        }
+        let _ = events.send(Event::Reload(Reload {
+            number,
+            changed: b.paths.into_iter().collect(),
+            changes,
+            compile: applied.compile,
+            upload: applied.upload,
+            stages,
+            cancelled,
+            errors,
+            line,
+        }));
+        number += 1;
+        batch = watcher.next_batch(&stop);
+    }
+    Ok(())
+}
+
+/// Where stages go: the output file, and the live page.
+struct Output {
+    path: PathBuf,
+    format: Format,
+    live: Option<Arc<server::Live>>,
+}
+
+impl Output {
+    /// Writes a stage (scaled up to `full`) atomically; returns the encode
+    /// and write times.
+    fn write(&mut self, frame: &StageFrame, full: (u32, u32)) -> Result<(Duration, Duration), String> {
+        let t0 = Instant::now();
+        let image = stage::upscale(&frame.image, full.0, full.1);
+        let bytes = output::encode(&image, self.format)
+            .map_err(|e| format!("{}: cannot encode: {e}", self.path.display()))?;
+        let encode = t0.elapsed();
+        let t1 = Instant::now();
+        write_atomic(&self.path, &bytes)
+            .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))?;
+        let write = t1.elapsed();
+        if let Some(live) = &self.live {
+            let png = if self.format == Format::Png {
+                bytes
+            } else {
+                output::encode(&image, Format::Png).unwrap_or_default()
+            };
+            live.set_image(png);
+        }
+        Ok((encode, write))
+    }
+}
+
+/// Writes to a temporary file beside `path` and renames it into place.
+fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+    tmp.write_all(bytes)?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Runs the loop until `stop` is set, printing as the command line does.
+pub fn run_printing(opts: &WatchOptions, stop: Arc<AtomicBool>) -> anyhow::Result<()> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let opts = opts.clone();
+    let stop2 = stop.clone();
+    let looped = std::thread::Builder::new()
+        .name("watch".into())
+        .spawn(move || run(&opts, stop2, tx))?;
+    for ev in rx {
+        ev.print();
+    }
+    stop.store(true, Ordering::Relaxed);
+    looped
+        .join()
+        .map_err(|_| anyhow::anyhow!("the watch loop panicked"))?
+}

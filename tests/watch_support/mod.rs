@@ -1,0 +1,212 @@
+//! Shared set-up of the hot-reload tests: a temporary copy of the shaders and
+//! a small scene, edits, and waiting for reloads with generous timeouts
+//! (polling, never a fixed sleep as the only synchronisation).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use penumbra::render::ShaderSource;
+use penumbra::watch::{self, Event, Reload, WatchOptions};
+
+/// A first render compiles the kernel (lavapipe: about a second per kernel
+/// on two cores, more under the validation layer); allow far more.
+pub const TIMEOUT: Duration = Duration::from_secs(120);
+
+/// A red sphere at the origin, seen from +z; `x` moves it sideways.
+pub fn scene_json(x: f64, rgb: [f64; 3]) -> String {
+    format!(
+        r#"{{
+  "camera": {{ "position": [0, 0, 5], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 64, "height": 48 }},
+  "background": [0, 0, 0],
+  "shaders": {{ "m": {{ "type": "phong", "ambient": {rgb:?}, "diffuse": [0, 0, 0], "specular": [0, 0, 0], "shininess": 1 }} }},
+  "objects": [ {{ "type": "sphere", "center": [{x}, 0, 0], "radius": 1, "shader": "m" }} ],
+  "lights": [ {{ "type": "directional", "direction": [0, 0, -1], "ambient": [1, 1, 1], "diffuse": [0, 0, 0], "specular": [0, 0, 0] }} ]
+}}"#
+    )
+}
+
+/// Copies a directory tree.
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let dest = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &dest);
+        } else {
+            std::fs::copy(entry.path(), dest).unwrap();
+        }
+    }
+}
+
+/// A temporary directory with `shaders/`, `scene.json` and the output path.
+pub struct Fixture {
+    pub dir: tempfile::TempDir,
+    pub shaders: PathBuf,
+    pub scene: PathBuf,
+    pub out: PathBuf,
+    /// `shading/shader.wgsl` as copied.
+    pub shader_original: String,
+}
+
+pub const SHADER: &str = "shading/shader.wgsl";
+
+impl Fixture {
+    pub fn new() -> Fixture {
+        let dir = tempfile::tempdir().unwrap();
+        let shaders = dir.path().join("shaders");
+        copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders"), &shaders);
+        let scene = dir.path().join("scene.json");
+        std::fs::write(&scene, scene_json(0.0, [0.8, 0.3, 0.2])).unwrap();
+        let out = dir.path().join("out.png");
+        let shader_original = std::fs::read_to_string(shaders.join(SHADER)).unwrap();
+        Fixture {
+            dir,
+            shaders,
+            scene,
+            out,
+            shader_original,
+        }
+    }
+
+    pub fn options(&self) -> WatchOptions {
+        let mut o = WatchOptions::new(&self.scene, &self.out);
+        o.renderer.shaders = ShaderSource::Directory(self.shaders.clone());
+        o.renderer.validation = std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1");
+        o
+    }
+
+    pub fn shader_path(&self) -> PathBuf {
+        self.shaders.join(SHADER)
+    }
+
+    /// `shade()` with its returned colour multiplied by `factor` (WGSL).
+    pub fn shader_scaled(&self, factor: &str) -> String {
+        scale_shade(&self.shader_original, factor)
+    }
+
+    pub fn output(&self) -> Vec<u8> {
+        std::fs::read(&self.out).unwrap()
+    }
+
+    /// The output's centre pixel, sRGB 8 bit.
+    pub fn centre(&self) -> [u8; 3] {
+        pixel(&self.out, 32, 24)
+    }
+}
+
+/// Multiplies what `shade()` returns by `factor`.
+pub fn scale_shade(src: &str, factor: &str) -> String {
+    let start = src
+        .find("fn shade(")
+        .expect("shading/shader.wgsl has fn shade(");
+    let rel = src[start..]
+        .find("return colour;")
+        .expect("shade() ends with `return colour;`");
+    let at = start + rel;
+    format!(
+        "{}return colour * {factor};{}",
+        &src[..at],
+        &src[at + "return colour;".len()..]
+    )
+}
+
+/// A pixel of a PNG file.
+pub fn pixel(path: &Path, x: u32, y: u32) -> [u8; 3] {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.get_pixel(x, y).0
+}
+
+/// Writes `text` to `path` the way editors that save by rename do: a new
+/// file beside it, renamed over it (the old inode goes away).
+pub fn save_by_rename(path: &Path, text: &str) {
+    let tmp = path.with_extension("swp~");
+    std::fs::write(&tmp, text).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+/// The loop running in a thread of this test.
+pub struct Running {
+    pub stop: Arc<AtomicBool>,
+    pub rx: Receiver<Event>,
+    pub thread: Option<std::thread::JoinHandle<anyhow::Result<()>>>,
+    pub reloads: Vec<Reload>,
+}
+
+impl Running {
+    pub fn start(opts: WatchOptions) -> Running {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, rx) = std::sync::mpsc::channel();
+        let s = stop.clone();
+        let thread = std::thread::spawn(move || watch::run(&opts, s, tx));
+        let mut r = Running {
+            stop,
+            rx,
+            thread: Some(thread),
+            reloads: Vec::new(),
+        };
+        let first = r.next_reload();
+        assert_eq!(first.number, 0);
+        r
+    }
+
+    /// The next reload, or a panic after [`TIMEOUT`].
+    pub fn next_reload(&mut self) -> Reload {
+        self.next_reload_within(TIMEOUT)
+            .unwrap_or_else(|| panic!("no reload within {TIMEOUT:?}; so far: {:#?}", self.reloads))
+    }
+
+    pub fn next_reload_within(&mut self, timeout: Duration) -> Option<Reload> {
+        let end = Instant::now() + timeout;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.rx.recv_timeout(left) {
+                Ok(Event::Reload(r)) => {
+                    eprintln!("{}", r.line);
+                    for e in &r.errors {
+                        eprintln!("  error: {e}");
+                    }
+                    self.reloads.push(r.clone());
+                    return Some(r);
+                }
+                Ok(_) => continue,
+                Err(RecvTimeoutError::Timeout) => return None,
+                Err(RecvTimeoutError::Disconnected) => {
+                    let t = self.thread.take().unwrap();
+                    panic!("the loop ended: {:?}", t.join());
+                }
+            }
+        }
+    }
+
+    /// Reloads until `pred` holds for one (edits may be seen as more than
+    /// one batch); panics after [`TIMEOUT`].
+    pub fn reload_until(&mut self, what: &str, mut pred: impl FnMut(&Reload) -> bool) -> Reload {
+        let end = Instant::now() + TIMEOUT;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.next_reload_within(left) {
+                Some(r) if pred(&r) => return r,
+                Some(_) => continue,
+                None => panic!("no reload with {what} within {TIMEOUT:?}; so far: {:#?}", self.reloads),
+            }
+        }
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            if let Ok(Err(e)) = t.join() {
+                if !std::thread::panicking() {
+                    panic!("the loop failed: {e:#}");
+                }
+            }
+        }
+    }
+}
