@@ -112,7 +112,7 @@ struct RenderArgs {
     seed: u32,
     /// Stop after the pass in flight once this many seconds have passed, and
     /// write the mean of the passes done.
-    #[arg(long, value_parser = parse_seconds)]
+    #[arg(long, value_parser = parse_seconds, allow_hyphen_values = true)]
     time_budget: Option<std::time::Duration>,
     /// Sample placement: `stratified` (low-discrepancy) or `random`.
     #[arg(long, default_value = "stratified")]
@@ -120,7 +120,9 @@ struct RenderArgs {
 }
 
 fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
-    let v: f64 = s.parse().map_err(|_| format!("expected a number of seconds, got `{s}`"))?;
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("expected a number of seconds, got `{s}`"))?;
     if !(v > 0.0 && v <= 1e6) {
         return Err(format!("must be in (0, 1000000] seconds, got {s}"));
     }
@@ -180,20 +182,21 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed,
         time_budget,
     };
-    let frame = render_with_progress(&mut renderer, &scene_data, &sampling).map_err(|e| match e {
-        // Device limits name a scene field: say which file.
-        RenderError::Scene { field, message } => {
-            let field = match (field.as_str(), width.is_some(), height.is_some()) {
-                ("camera.width", true, _) => "--width".to_string(),
-                ("camera.height", _, true) => "--height".to_string(),
-                ("camera.width/camera.height", true, _)
-                | ("camera.width/camera.height", _, true) => "--width/--height".to_string(),
-                _ => field,
-            };
-            anyhow::anyhow!("{}: {field}: {message}", scene.display())
-        }
-        e => e.into(),
-    })?;
+    let frame =
+        render_with_progress(&mut renderer, &scene_data, &sampling).map_err(|e| match e {
+            // Device limits name a scene field: say which file.
+            RenderError::Scene { field, message } => {
+                let field = match (field.as_str(), width.is_some(), height.is_some()) {
+                    ("camera.width", true, _) => "--width".to_string(),
+                    ("camera.height", _, true) => "--height".to_string(),
+                    ("camera.width/camera.height", true, _)
+                    | ("camera.width/camera.height", _, true) => "--width/--height".to_string(),
+                    _ => field,
+                };
+                anyhow::anyhow!("{}: {field}: {message}", scene.display())
+            }
+            e => e.into(),
+        })?;
     let t1 = Instant::now();
     output::write_image(&out, &frame.image)?;
     let write = t1.elapsed();

@@ -15,22 +15,41 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     let first = &w.reloads[0];
     assert!(first.errors.is_empty(), "{:?}", first.errors);
     let sizes: Vec<_> = first.stages.iter().map(|s| (s.width, s.height)).collect();
-    assert_eq!(sizes, [(16, 12), (64, 48)], "a 1/4 preview, then the full image");
+    assert_eq!(
+        sizes,
+        [(16, 12), (64, 48)],
+        "a 1/4 preview, then the full image"
+    );
     let c0 = fx.centre();
     assert!(c0[0] > 200 && c0[1] > 100, "the red sphere: {c0:?}");
 
     // A shader edit: no red any more. The kernel is recompiled, the scene
     // upload kept.
-    std::fs::write(fx.shader_path(), fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)")).unwrap();
+    std::fs::write(
+        fx.shader_path(),
+        fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
+    )
+    .unwrap();
     let r = w.next_reload();
     assert!(r.changes.shaders && !r.changes.scene, "{}", r.line);
     assert!(r.errors.is_empty(), "{:?}", r.errors);
     assert!(r.compile.is_some() && r.upload.is_none(), "{}", r.line);
-    assert!(r.line.contains("shaders (shading/shader.wgsl)"), "{}", r.line);
-    assert!(r.line.contains("compile ") && r.line.contains("latency "), "{}", r.line);
+    assert!(
+        r.line.contains("shaders (shading/shader.wgsl)"),
+        "{}",
+        r.line
+    );
+    assert!(
+        r.line.contains("compile ") && r.line.contains("latency "),
+        "{}",
+        r.line
+    );
     let c1 = fx.centre();
     assert_eq!(c1[0], 0, "red multiplied by 0: {c1:?}");
-    assert!(c1[1].abs_diff(c0[1]) <= 1 && c1[2].abs_diff(c0[2]) <= 1, "{c0:?} -> {c1:?}");
+    assert!(
+        c1[1].abs_diff(c0[1]) <= 1 && c1[2].abs_diff(c0[2]) <= 1,
+        "{c0:?} -> {c1:?}"
+    );
     let good = fx.output();
 
     // Broken: the error names the file, line and column, shows the line and a
@@ -49,7 +68,10 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     assert!(e.contains(&want), "error should name {want}: {e}");
     let lines: Vec<&str> = e.lines().collect();
     assert!(lines.len() >= 3, "{e}");
-    assert!(lines[1].contains("return colour * vec3<f32>(0.0, 1.0, 1.0) +;"), "{e}");
+    assert!(
+        lines[1].contains("return colour * vec3<f32>(0.0, 1.0, 1.0) +;"),
+        "{e}"
+    );
     assert!(lines[2].trim_start().starts_with('^'), "caret line: {e}");
     // The caret sits under the column the location names.
     let col: usize = lines[0]
@@ -61,7 +83,11 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     assert_eq!(lines[2].find('^').unwrap() - 2, col - 1, "{e}");
     assert!(r.stages.is_empty(), "{r:#?}");
     assert!(r.line.contains("ERROR"), "{}", r.line);
-    assert_eq!(fx.output(), good, "a broken shader must not touch the output");
+    assert_eq!(
+        fx.output(),
+        good,
+        "a broken shader must not touch the output"
+    );
 
     // A scene edit while the shader is broken: rendered with the last good
     // kernel (no compile), the error still reported.
@@ -69,14 +95,21 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     let r = w.next_reload();
     assert!(r.changes.scene && !r.changes.shaders, "{}", r.line);
     assert_eq!(r.stages.len(), 2, "{r:#?}");
-    assert!(r.stages.iter().all(|s| s.compile.total().is_zero()), "{r:#?}");
+    assert!(
+        r.stages.iter().all(|s| s.compile.total().is_zero()),
+        "{r:#?}"
+    );
     assert!(r.errors.iter().any(|e| e.contains(&want)), "{r:#?}");
     let c2 = fx.centre();
     assert_eq!(c2[0], 0, "still the last good kernel: {c2:?}");
     assert!(c2[1] > c1[1] + 20, "green 0.3 -> 0.6: {c1:?} -> {c2:?}");
 
     // Fixed: recovery, with a new colour.
-    std::fs::write(fx.shader_path(), fx.shader_scaled("vec3<f32>(1.0, 0.0, 1.0)")).unwrap();
+    std::fs::write(
+        fx.shader_path(),
+        fx.shader_scaled("vec3<f32>(1.0, 0.0, 1.0)"),
+    )
+    .unwrap();
     let r = w.next_reload();
     assert!(r.errors.is_empty(), "{:?}", r.errors);
     let c3 = fx.centre();
@@ -85,8 +118,15 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     // Scene edit: the sphere moves right; the kernel is kept (same features).
     std::fs::write(&fx.scene, watch_support::scene_json(1.5, [0.8, 0.6, 0.2])).unwrap();
     let r = w.next_reload();
-    assert!(r.changes.scene && r.upload.is_some() && r.compile.is_none(), "{}", r.line);
-    assert!(r.stages.iter().all(|s| s.compile.total().is_zero()), "{r:#?}");
+    assert!(
+        r.changes.scene && r.upload.is_some() && r.compile.is_none(),
+        "{}",
+        r.line
+    );
+    assert!(
+        r.stages.iter().all(|s| s.compile.total().is_zero()),
+        "{r:#?}"
+    );
     assert!(r.line.contains("kernel kept"), "{}", r.line);
     assert_eq!(fx.centre(), [0, 0, 0], "background where the sphere was");
     // 1.5 units right at distance 5 with a 40° field of view: x ≈ 32 + 24·1.5/(5·tan 20°) ≈ 52.
@@ -94,15 +134,22 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     assert!(right[0] > 200, "the sphere moved right: {right:?}");
 
     // A shader saved by rename (new inode): still seen.
-    save_by_rename(&fx.shader_path(), &fx.shader_scaled("vec3<f32>(0.0, 0.0, 1.0)"));
-    w.reload_until("the renamed shader", |r| r.errors.is_empty() && r.changes.shaders);
+    save_by_rename(
+        &fx.shader_path(),
+        &fx.shader_scaled("vec3<f32>(0.0, 0.0, 1.0)"),
+    );
+    w.reload_until("the renamed shader", |r| {
+        r.errors.is_empty() && r.changes.shaders
+    });
     assert_eq!(pixel(&fx.out, 52, 24)[0], 0);
 
     // The scene saved by delete and re-create: still seen (one reload, or
     // an error for the missing file and then the recovery).
     std::fs::remove_file(&fx.scene).unwrap();
     std::fs::write(&fx.scene, watch_support::scene_json(-1.5, [0.8, 0.6, 0.2])).unwrap();
-    w.reload_until("the re-created scene", |r| r.errors.is_empty() && r.changes.scene);
+    w.reload_until("the re-created scene", |r| {
+        r.errors.is_empty() && r.changes.scene
+    });
     assert_eq!(pixel(&fx.out, 52, 24), [0, 0, 0]);
     let left = pixel(&fx.out, 12, 24);
     assert!(left[2] > 100, "the sphere moved left: {left:?}");
@@ -111,7 +158,9 @@ fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {
     for factor in ["vec3<f32>(1.0, 1.0, 0.0)", "vec3<f32>(1.0, 0.0, 0.0)"] {
         std::fs::remove_file(fx.shader_path()).unwrap();
         std::fs::write(fx.shader_path(), fx.shader_scaled(factor)).unwrap();
-        w.reload_until("the re-created shader", |r| r.errors.is_empty() && r.changes.shaders);
+        w.reload_until("the re-created shader", |r| {
+            r.errors.is_empty() && r.changes.shaders
+        });
     }
     let left = pixel(&fx.out, 12, 24);
     assert!(left[0] > 200 && left[1] == 0 && left[2] == 0, "{left:?}");
@@ -139,8 +188,11 @@ fn a_burst_of_saves_gives_one_reload() {
     assert_eq!(c[0], 0);
     let want = {
         let fresh = Fixture::new();
-        std::fs::write(fresh.shader_path(), fresh.shader_scaled("vec3<f32>(0.0, 5.0 / 5.0, 1.0)"))
-            .unwrap();
+        std::fs::write(
+            fresh.shader_path(),
+            fresh.shader_scaled("vec3<f32>(0.0, 5.0 / 5.0, 1.0)"),
+        )
+        .unwrap();
         let _running = Running::start(fresh.options());
         fresh.centre()
     };
@@ -161,12 +213,19 @@ fn a_broken_scene_keeps_the_last_image_and_recovers() {
     assert_eq!(fx.output(), good);
 
     // Valid JSON, impossible value: the field is named.
-    std::fs::write(&fx.scene, scene_json(0.0, [0.8, 0.3, 0.2]).replace("\"radius\": 1", "\"radius\": -1"))
-        .unwrap();
+    std::fs::write(
+        &fx.scene,
+        scene_json(0.0, [0.8, 0.3, 0.2]).replace("\"radius\": 1", "\"radius\": -1"),
+    )
+    .unwrap();
     let r = w.reload_until("a radius error", |r| {
         r.errors.iter().any(|e| e.contains("radius"))
     });
-    assert!(r.errors[0].contains("scene.json") && r.errors[0].contains("radius"), "{:?}", r.errors);
+    assert!(
+        r.errors[0].contains("scene.json") && r.errors[0].contains("radius"),
+        "{:?}",
+        r.errors
+    );
     assert_eq!(fx.output(), good);
 
     // More than the device can hold: an upload error, also survived.

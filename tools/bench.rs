@@ -1,1 +1,796 @@
-fn main() {}
+//! penumbra's benchmark: throughput on the bunny scene, the seminar's
+//! triangle-test claim, scaling with triangles, pixels and lights, the effect
+//! of kernel specialisation, lavapipe's knobs, and a CPU baseline. One run
+//! writes `docs/bench.md`, `docs/bench.json` and `docs/scaling.png`:
+//!
+//! ```text
+//! cargo run --release --example bench
+//! ```
+//!
+//! Every GPU measurement runs in a child process (this binary, re-invoked
+//! with the hidden `--child` flag) so that environment variables Mesa reads
+//! when the driver loads apply: `MESA_SHADER_CACHE_DISABLE=true` (an honest,
+//! cold driver-compile figure) and lavapipe's `LP_NUM_THREADS` and
+//! `LP_NATIVE_VECTOR_WIDTH`. The program uses only the public `Renderer` API,
+//! so it runs unchanged on a GPU (`--device` picks one).
+
+#[path = "bench/cpu.rs"]
+mod cpu;
+#[path = "bench/meshes.rs"]
+mod meshes;
+#[path = "bench/plot.rs"]
+mod plot;
+#[path = "bench/report.rs"]
+mod report;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context as _};
+use clap::Parser;
+use serde::{Deserialize, Serialize};
+
+use penumbra::render::layout::GpuScene;
+use penumbra::render::{
+    Accel, Frame, KernelOptions, Renderer, RendererOptions, TriangleTest, UploadedScene,
+};
+use penumbra::scene::Scene;
+use penumbra::vulkan::DeviceSelector;
+
+#[derive(Parser, Clone)]
+#[command(
+    name = "bench",
+    about = "penumbra's benchmark: writes docs/bench.md, docs/bench.json and docs/scaling.png"
+)]
+pub struct Args {
+    /// Directory for bench.md, bench.json and scaling.png.
+    #[arg(long, default_value = "docs")]
+    out: PathBuf,
+    /// Vulkan device: an index from `penumbra devices`, or part of its name.
+    #[arg(long)]
+    device: Option<String>,
+    /// Fewer frames and smaller meshes: a smoke test of the program, not a
+    /// measurement.
+    #[arg(long)]
+    quick: bool,
+    /// Skip the lavapipe knob runs (on a GPU they do not apply).
+    #[arg(long)]
+    no_knobs: bool,
+    /// Internal: run one part in this process and write its JSON here.
+    #[arg(long, hide = true, requires = "child_out")]
+    child: Option<String>,
+    #[arg(long, hide = true)]
+    child_out: Option<PathBuf>,
+}
+
+// ---------------------------------------------------------------- results
+
+/// The device as the renderer reports it.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Device {
+    pub name: String,
+    pub device_type: String,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub api_version: String,
+}
+
+/// Times in milliseconds with their median, minimum and maximum.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Stat {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+    pub samples: Vec<f64>,
+}
+
+impl Stat {
+    pub fn of(samples: &[f64]) -> Stat {
+        let mut s = samples.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n == 0 {
+            f64::NAN
+        } else if n % 2 == 1 {
+            s[n / 2]
+        } else {
+            (s[n / 2 - 1] + s[n / 2]) / 2.0
+        };
+        Stat {
+            median,
+            min: s.first().copied().unwrap_or(f64::NAN),
+            max: s.last().copied().unwrap_or(f64::NAN),
+            samples: samples.to_vec(),
+        }
+    }
+}
+
+/// One scene's phases and frames.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Throughput {
+    pub scene: String,
+    pub triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    pub scene_build_ms: f64,
+    pub naga_ms: f64,
+    pub pipeline_ms: f64,
+    pub driver_compile_ms: f64,
+    pub bvh_build_ms: f64,
+    pub upload_ms: f64,
+    pub first_frame_ms: f64,
+    pub bvh_nodes: usize,
+    pub bvh_depth: usize,
+    pub bvh_bytes: usize,
+    pub primary_rays: u64,
+    pub shadow_rays: u64,
+    pub hits: usize,
+    pub render_ms: Stat,
+    pub readback_ms: Stat,
+    /// Mrays/s at the median, slowest and fastest frame.
+    pub mrays_median: f64,
+    pub mrays_min: f64,
+    pub mrays_max: f64,
+}
+
+/// One child run of the throughput part.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct ThroughputPart {
+    pub device: Device,
+    pub env: Vec<(String, String)>,
+    pub scenes: Vec<Throughput>,
+}
+
+/// Two variants measured interleaved (A B A B ...).
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Pair {
+    pub what: String,
+    pub a: String,
+    pub b: String,
+    pub width: u32,
+    pub height: u32,
+    pub a_ms: Stat,
+    pub b_ms: Stat,
+    /// A/B of each interleaved pair of frames.
+    pub ratio: Stat,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct SeminarPart {
+    pub uv_vs_t_brute: Pair,
+    pub uv_vs_t_bvh: Pair,
+    pub bvh_vs_brute: Pair,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct TrianglePoint {
+    pub triangles: usize,
+    pub scene_build_ms: f64,
+    pub bvh_build_ms: f64,
+    pub upload_ms: f64,
+    pub bvh_nodes: usize,
+    pub bvh_depth: usize,
+    pub bvh_bytes: usize,
+    pub rays: u64,
+    pub render_ms: Stat,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct SizePoint {
+    pub width: u32,
+    pub height: u32,
+    pub rays: u64,
+    pub render_ms: Stat,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct LightPoint {
+    pub lights: usize,
+    pub rays: u64,
+    pub render_ms: Stat,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct ScalingPart {
+    pub triangles: Vec<TrianglePoint>,
+    pub pixels: Vec<SizePoint>,
+    pub lights: Vec<LightPoint>,
+}
+
+/// Compile phases and SPIR-V size of one kernel.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct KernelCompile {
+    pub spirv_bytes: usize,
+    /// Per cold compile (two rounds, the order swapped in the second).
+    pub naga_ms: Vec<f64>,
+    pub pipeline_ms: Vec<f64>,
+    pub driver_compile_ms: Vec<f64>,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct SpecialisePart {
+    pub specialised: KernelCompile,
+    pub general: KernelCompile,
+    /// A = general, B = specialised.
+    pub frames: Pair,
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct CpuPart {
+    pub threads: usize,
+    pub width: u32,
+    pub height: u32,
+    pub cpu_ms: Stat,
+    pub gpu_ms: Stat,
+    /// GPU/CPU of each interleaved pair.
+    pub ratio: Stat,
+    pub cpu_hits: usize,
+    pub gpu_hits: usize,
+    pub cpu_shadow_rays: u64,
+    pub gpu_shadow_rays: u64,
+    pub max_abs_diff: f32,
+    pub pixels_over_1e3: usize,
+    /// Modelled SIMD-8 utilisation of the traversal loops (see report).
+    pub simd8_utilisation: f64,
+    /// Mean loop iterations per pixel (box/leaf visits + triangle tests).
+    pub mean_steps: f64,
+}
+
+/// Everything one run measured.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Results {
+    pub machine: String,
+    pub cores: usize,
+    pub date: String,
+    pub commit: String,
+    pub command: String,
+    pub quick: bool,
+    pub wall_s: f64,
+    pub throughput: ThroughputPart,
+    pub knobs: Vec<ThroughputPart>,
+    pub seminar: SeminarPart,
+    pub scaling: ScalingPart,
+    pub specialise: SpecialisePart,
+    pub cpu: CpuPart,
+}
+
+// ---------------------------------------------------------------- helpers
+
+pub fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn renderer(args: &Args) -> anyhow::Result<Renderer> {
+    let device = args
+        .device
+        .as_deref()
+        .map(|d| d.parse::<DeviceSelector>())
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
+    Ok(Renderer::new(&RendererOptions {
+        device,
+        ..Default::default()
+    })?)
+}
+
+fn device(r: &Renderer) -> Device {
+    let d = r.device();
+    Device {
+        name: d.name.clone(),
+        device_type: d.device_type.clone(),
+        driver_name: d.driver_name.clone(),
+        driver_info: d.driver_info.clone(),
+        api_version: d.api_version.clone(),
+    }
+}
+
+fn hits(frame: &Frame) -> usize {
+    frame.image.pixels.iter().filter(|p| p[3] == 1.0).count()
+}
+
+fn kernel(accel: Accel, triangle_test: TriangleTest) -> KernelOptions {
+    KernelOptions {
+        accel,
+        triangle_test,
+        ..Default::default()
+    }
+}
+
+/// Uploads `scene` with `k`'s acceleration structure.
+fn upload(r: &mut Renderer, scene: &Scene, k: KernelOptions) -> anyhow::Result<UploadedScene> {
+    r.set_kernel(k);
+    Ok(r.upload(scene)?)
+}
+
+/// Renders `k` on `up` at `w`×`h`.
+fn frame(
+    r: &mut Renderer,
+    up: &UploadedScene,
+    k: KernelOptions,
+    w: u32,
+    h: u32,
+) -> anyhow::Result<Frame> {
+    r.set_kernel(k);
+    Ok(r.render_uploaded(up, w, h)?)
+}
+
+/// `reps` frames, after a first frame (which compiles the kernel if needed)
+/// and `warm` warm-up frames; returns the measured frames' render times and
+/// the last frame.
+fn frames(
+    r: &mut Renderer,
+    up: &UploadedScene,
+    k: KernelOptions,
+    (w, h): (u32, u32),
+    warm: usize,
+    reps: usize,
+) -> anyhow::Result<(Vec<f64>, Frame)> {
+    let mut last = frame(r, up, k, w, h)?;
+    for _ in 0..warm {
+        last = frame(r, up, k, w, h)?;
+    }
+    let mut t = Vec::new();
+    for _ in 0..reps {
+        last = frame(r, up, k, w, h)?;
+        t.push(ms(last.stats.timings.render));
+    }
+    Ok((t, last))
+}
+
+/// Two variants interleaved A B A B ... after one warm-up frame of each.
+#[allow(clippy::too_many_arguments)]
+fn interleave(
+    r: &mut Renderer,
+    what: &str,
+    a: (&str, &UploadedScene, KernelOptions),
+    b: (&str, &UploadedScene, KernelOptions),
+    (w, h): (u32, u32),
+    reps: usize,
+) -> anyhow::Result<Pair> {
+    for (_, up, k) in [a, b] {
+        frame(r, up, k, w, h)?;
+        frame(r, up, k, w, h)?;
+    }
+    let (mut ta, mut tb, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..reps {
+        eprintln!("  {what}: pair {}/{reps}", i + 1);
+        let fa = ms(frame(r, a.1, a.2, w, h)?.stats.timings.render);
+        let fb = ms(frame(r, b.1, b.2, w, h)?.stats.timings.render);
+        ta.push(fa);
+        tb.push(fb);
+        ratio.push(fa / fb);
+    }
+    Ok(Pair {
+        what: what.into(),
+        a: a.0.into(),
+        b: b.0.into(),
+        width: w,
+        height: h,
+        a_ms: Stat::of(&ta),
+        b_ms: Stat::of(&tb),
+        ratio: Stat::of(&ratio),
+    })
+}
+
+// ---------------------------------------------------------------- parts
+
+/// Phases and frames of one scene at its own size, in a fresh pipeline cache.
+fn throughput_of(
+    r: &mut Renderer,
+    name: &str,
+    scene: &Scene,
+    scene_build: Duration,
+    reps: usize,
+) -> anyhow::Result<Throughput> {
+    eprintln!("  throughput: {name}");
+    r.clear_pipeline_cache();
+    let k = KernelOptions::default();
+    let up = upload(r, scene, k)?;
+    let (bvh_build, upload_t) = up.upload_timings();
+    let (w, h) = up.size();
+    let first = frame(r, &up, k, w, h)?;
+    let t = first.stats.timings;
+    let (render, last) = frames(r, &up, k, (w, h), 1, reps)?;
+    let mut readback = Vec::new();
+    for _ in 0..reps.min(3) {
+        readback.push(ms(frame(r, &up, k, w, h)?.stats.timings.readback));
+    }
+    let rays = last.stats.rays() as f64;
+    let render_ms = Stat::of(&render);
+    Ok(Throughput {
+        scene: name.into(),
+        triangles: scene.triangle_count(),
+        width: w,
+        height: h,
+        scene_build_ms: ms(scene_build),
+        naga_ms: ms(t.shader_compile),
+        pipeline_ms: ms(t.pipeline_creation),
+        driver_compile_ms: ms(t.driver_compile),
+        bvh_build_ms: ms(bvh_build),
+        upload_ms: ms(upload_t),
+        first_frame_ms: ms(t.render),
+        bvh_nodes: last.stats.bvh_nodes,
+        bvh_depth: last.stats.bvh_depth,
+        bvh_bytes: last.stats.bvh_bytes,
+        primary_rays: last.stats.primary_rays,
+        shadow_rays: last.stats.shadow_rays,
+        hits: hits(&last),
+        mrays_median: rays / render_ms.median / 1e3,
+        mrays_min: rays / render_ms.max / 1e3,
+        mrays_max: rays / render_ms.min / 1e3,
+        render_ms,
+        readback_ms: Stat::of(&readback),
+    })
+}
+
+fn part_throughput(args: &Args, big: bool) -> anyhow::Result<ThroughputPart> {
+    let mut r = renderer(args)?;
+    let bunny = meshes::bunny_scene(&root())?;
+    let reps = if args.quick { 3 } else { 7 };
+    let mut scenes = vec![throughput_of(
+        &mut r,
+        "bunny",
+        &bunny,
+        Duration::ZERO,
+        reps,
+    )?];
+    if big {
+        let levels = if args.quick { 1 } else { 3 };
+        let t0 = Instant::now();
+        let big = meshes::subdivided_bunny(&bunny, levels);
+        let build = t0.elapsed();
+        let name = format!("bunny subdivided {levels}×");
+        scenes.push(throughput_of(&mut r, &name, &big, build, reps.min(5))?);
+    }
+    let env = [
+        "MESA_SHADER_CACHE_DISABLE",
+        "LP_NUM_THREADS",
+        "LP_NATIVE_VECTOR_WIDTH",
+    ]
+    .iter()
+    .filter_map(|k| std::env::var(k).ok().map(|v| (k.to_string(), v)))
+    .collect();
+    Ok(ThroughputPart {
+        device: device(&r),
+        env,
+        scenes,
+    })
+}
+
+fn part_seminar(args: &Args) -> anyhow::Result<SeminarPart> {
+    let mut r = renderer(args)?;
+    let bunny = meshes::bunny_scene(&root())?;
+    let (uv, tf) = (TriangleTest::UvFirst, TriangleTest::TFirst);
+    let brute = upload(&mut r, &bunny, kernel(Accel::BruteForce, uv))?;
+    let bvh = upload(&mut r, &bunny, kernel(Accel::Bvh, uv))?;
+    let small = if args.quick { (64, 64) } else { (256, 256) };
+    let full = bvh.size();
+    let (brute_reps, reps) = if args.quick { (1, 2) } else { (3, 5) };
+    let uv_vs_t_brute = interleave(
+        &mut r,
+        "brute force, u,v-first vs t-first",
+        ("u,v-first", &brute, kernel(Accel::BruteForce, uv)),
+        ("t-first", &brute, kernel(Accel::BruteForce, tf)),
+        small,
+        brute_reps,
+    )?;
+    let uv_vs_t_bvh = interleave(
+        &mut r,
+        "BVH, u,v-first vs t-first",
+        ("u,v-first", &bvh, kernel(Accel::Bvh, uv)),
+        ("t-first", &bvh, kernel(Accel::Bvh, tf)),
+        full,
+        reps,
+    )?;
+    let bvh_vs_brute = interleave(
+        &mut r,
+        "brute force vs BVH (u,v-first)",
+        ("brute force", &brute, kernel(Accel::BruteForce, uv)),
+        ("BVH", &bvh, kernel(Accel::Bvh, uv)),
+        small,
+        brute_reps,
+    )?;
+    Ok(SeminarPart {
+        uv_vs_t_brute,
+        uv_vs_t_bvh,
+        bvh_vs_brute,
+    })
+}
+
+fn part_scaling(args: &Args) -> anyhow::Result<ScalingPart> {
+    let mut r = renderer(args)?;
+    let bunny = meshes::bunny_scene(&root())?;
+    let k = KernelOptions::default();
+    let targets: &[u64] = if args.quick {
+        &[1_000, 10_000, 100_000]
+    } else {
+        &[1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000]
+    };
+    let mut triangles = Vec::new();
+    for &t in targets {
+        let t0 = Instant::now();
+        let scene = meshes::sphere_scene(&bunny, t);
+        let scene_build = t0.elapsed();
+        let up = upload(&mut r, &scene, k)?;
+        let (bvh_build, upload_t) = up.upload_timings();
+        let reps = if args.quick {
+            2
+        } else if t >= 300_000 {
+            3
+        } else {
+            5
+        };
+        let (render, last) = frames(&mut r, &up, k, up.size(), 1, reps)?;
+        eprintln!(
+            "  scaling: {} triangles: build {:.0} ms, render {:.1} ms",
+            scene.triangle_count(),
+            ms(bvh_build),
+            Stat::of(&render).median
+        );
+        triangles.push(TrianglePoint {
+            triangles: scene.triangle_count(),
+            scene_build_ms: ms(scene_build),
+            bvh_build_ms: ms(bvh_build),
+            upload_ms: ms(upload_t),
+            bvh_nodes: last.stats.bvh_nodes,
+            bvh_depth: last.stats.bvh_depth,
+            bvh_bytes: last.stats.bvh_bytes,
+            rays: last.stats.rays(),
+            render_ms: Stat::of(&render),
+        });
+    }
+    let reps = if args.quick { 2 } else { 5 };
+    let up = upload(&mut r, &bunny, k)?;
+    let mut pixels = Vec::new();
+    for side in [128u32, 256, 512, 1024] {
+        let (render, last) = frames(&mut r, &up, k, (side, side), 1, reps)?;
+        pixels.push(SizePoint {
+            width: side,
+            height: side,
+            rays: last.stats.rays(),
+            render_ms: Stat::of(&render),
+        });
+    }
+    drop(up);
+    let mut lights = Vec::new();
+    for count in [1usize, 2, 4, 8] {
+        let scene = meshes::with_lights(&bunny, count);
+        let up = upload(&mut r, &scene, k)?;
+        let (render, last) = frames(&mut r, &up, k, up.size(), 1, reps)?;
+        lights.push(LightPoint {
+            lights: count,
+            rays: last.stats.rays(),
+            render_ms: Stat::of(&render),
+        });
+    }
+    eprintln!("  scaling: pixels and lights done");
+    Ok(ScalingPart {
+        triangles,
+        pixels,
+        lights,
+    })
+}
+
+fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
+    let mut r = renderer(args)?;
+    let bunny = meshes::bunny_scene(&root())?;
+    let spec = KernelOptions::default();
+    let general = KernelOptions {
+        specialise: false,
+        ..spec
+    };
+    let src = penumbra::render::ShaderSource::Embedded.assemble()?;
+    let features = bunny.features();
+    let mut out = SpecialisePart {
+        specialised: KernelCompile {
+            spirv_bytes: src.compile(&features, &spec)?.len() * 4,
+            ..Default::default()
+        },
+        general: KernelCompile {
+            spirv_bytes: src.compile(&features, &general)?.len() * 4,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let up = upload(&mut r, &bunny, spec)?;
+    let (w, h) = up.size();
+    // Two rounds of cold compiles (the driver's cache is disabled by the
+    // parent), the order swapped in the second.
+    for order in [[true, false], [false, true]] {
+        r.clear_pipeline_cache();
+        for specialised in order {
+            let (k, c) = if specialised {
+                (spec, &mut out.specialised)
+            } else {
+                (general, &mut out.general)
+            };
+            let t = frame(&mut r, &up, k, 8, 8)?.stats.timings;
+            c.naga_ms.push(ms(t.shader_compile));
+            c.pipeline_ms.push(ms(t.pipeline_creation));
+            c.driver_compile_ms.push(ms(t.driver_compile));
+        }
+    }
+    let reps = if args.quick { 2 } else { 5 };
+    out.frames = interleave(
+        &mut r,
+        "general vs specialised kernel",
+        ("general", &up, general),
+        ("specialised", &up, spec),
+        (w, h),
+        reps,
+    )?;
+    Ok(out)
+}
+
+fn part_cpu(args: &Args) -> anyhow::Result<CpuPart> {
+    let mut r = renderer(args)?;
+    let bunny = meshes::bunny_scene(&root())?;
+    let mut gpu_scene = GpuScene::new(&bunny);
+    gpu_scene.build_bvh();
+    let cpu = cpu::CpuScene::new(&gpu_scene).map_err(anyhow::Error::msg)?;
+    let k = KernelOptions::default();
+    let up = upload(&mut r, &bunny, k)?;
+    let (w, h) = up.size();
+    let reps = if args.quick { 2 } else { 5 };
+    // Warm-up of both (the GPU's first frame compiles the kernel).
+    frame(&mut r, &up, k, w, h)?;
+    frame(&mut r, &up, k, w, h)?;
+    cpu.render(w, h);
+    let (mut tg, mut tc, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+    let mut last = None;
+    for i in 0..reps {
+        eprintln!("  cpu: pair {}/{reps}", i + 1);
+        let g = frame(&mut r, &up, k, w, h)?;
+        let t0 = Instant::now();
+        let c = cpu.render(w, h);
+        let c_ms = ms(t0.elapsed());
+        let g_ms = ms(g.stats.timings.render);
+        tg.push(g_ms);
+        tc.push(c_ms);
+        ratio.push(g_ms / c_ms);
+        last = Some((g, c));
+    }
+    let (g, c) = last.expect("at least one pair");
+    let mut max_abs_diff = 0f32;
+    let mut over = 0;
+    for (a, b) in g.image.pixels.iter().zip(&c.pixels) {
+        let d = (0..4).map(|i| (a[i] - b[i]).abs()).fold(0f32, f32::max);
+        max_abs_diff = max_abs_diff.max(d);
+        over += (d > 1e-3) as usize;
+    }
+    let steps = cpu.traversal_steps(w, h);
+    Ok(CpuPart {
+        threads: rayon::current_num_threads(),
+        width: w,
+        height: h,
+        cpu_ms: Stat::of(&tc),
+        gpu_ms: Stat::of(&tg),
+        ratio: Stat::of(&ratio),
+        cpu_hits: c.pixels.iter().filter(|p| p[3] == 1.0).count(),
+        gpu_hits: hits(&g),
+        cpu_shadow_rays: c.shadow_rays,
+        gpu_shadow_rays: g.stats.shadow_rays,
+        max_abs_diff,
+        pixels_over_1e3: over,
+        simd8_utilisation: steps.utilisation,
+        mean_steps: steps.mean,
+    })
+}
+
+fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
+    let json = match part {
+        "throughput" => serde_json::to_string(&part_throughput(args, true)?)?,
+        "throughput-bunny" => serde_json::to_string(&part_throughput(args, false)?)?,
+        "seminar" => serde_json::to_string(&part_seminar(args)?)?,
+        "scaling" => serde_json::to_string(&part_scaling(args)?)?,
+        "specialise" => serde_json::to_string(&part_specialise(args)?)?,
+        "cpu" => serde_json::to_string(&part_cpu(args)?)?,
+        _ => bail!("unknown part {part}"),
+    };
+    std::fs::write(out, json)?;
+    Ok(())
+}
+
+/// Runs `part` in a child process with Mesa's shader cache disabled and
+/// `env` set.
+fn child<T: for<'de> Deserialize<'de>>(
+    args: &Args,
+    part: &str,
+    env: &[(&str, &str)],
+) -> anyhow::Result<T> {
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("part.json");
+    let mut cmd = Command::new(std::env::current_exe()?);
+    cmd.args(["--child", part, "--child-out"]).arg(&out);
+    if args.quick {
+        cmd.arg("--quick");
+    }
+    if let Some(d) = &args.device {
+        cmd.args(["--device", d]);
+    }
+    cmd.env("MESA_SHADER_CACHE_DISABLE", "true");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let t0 = Instant::now();
+    eprintln!("bench: {part} {env:?}");
+    let status = cmd
+        .status()
+        .with_context(|| format!("running part {part}"))?;
+    if !status.success() {
+        bail!("part {part} {env:?} failed: {status}");
+    }
+    eprintln!("bench: {part} took {:.1} s", t0.elapsed().as_secs_f64());
+    let text = std::fs::read_to_string(&out)?;
+    Ok(serde_json::from_str(&text)?)
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    if let Some(part) = &args.child {
+        let out = args.child_out.clone().expect("clap requires --child-out");
+        return run_child(&args, part, &out);
+    }
+    let t0 = Instant::now();
+    let mut results = Results {
+        machine: report::cpu_model(),
+        cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        date: report::utc_now(),
+        commit: report::git_commit(&root()),
+        command: std::iter::once("cargo run --release --example bench --".to_string())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" ")
+            .trim_end_matches(" --")
+            .to_string(),
+        quick: args.quick,
+        ..Default::default()
+    };
+    results.throughput = child(&args, "throughput", &[])?;
+    if !args.no_knobs {
+        let knobs: &[(&str, &str)] = &[
+            ("LP_NUM_THREADS", "1"),
+            ("LP_NUM_THREADS", "2"),
+            ("LP_NUM_THREADS", "4"),
+            ("LP_NATIVE_VECTOR_WIDTH", "128"),
+            ("LP_NATIVE_VECTOR_WIDTH", "256"),
+            ("LP_NATIVE_VECTOR_WIDTH", "512"),
+        ];
+        for &kv in knobs {
+            match child(&args, "throughput-bunny", &[kv]) {
+                Ok(p) => results.knobs.push(p),
+                Err(e) => eprintln!("bench: knob {kv:?} failed: {e:#}"),
+            }
+        }
+    }
+    results.seminar = child(&args, "seminar", &[])?;
+    results.scaling = child(&args, "scaling", &[])?;
+    results.specialise = child(&args, "specialise", &[])?;
+    results.cpu = child(&args, "cpu", &[])?;
+    results.wall_s = t0.elapsed().as_secs_f64();
+
+    std::fs::create_dir_all(&args.out)?;
+    std::fs::write(
+        args.out.join("bench.json"),
+        serde_json::to_string_pretty(&results)? + "\n",
+    )?;
+    plot::scaling(&results, &args.out.join("scaling.png"))?;
+    std::fs::write(args.out.join("bench.md"), report::markdown(&results))?;
+    eprintln!(
+        "bench: wrote {}/bench.md, bench.json, scaling.png in {:.0} s",
+        args.out.display(),
+        results.wall_s
+    );
+    Ok(())
+}
+
+/// The report's "what stands in the way" section, from this run's figures.
+pub fn analysis(r: &Results) -> String {
+    let _ = r;
+    String::from("TODO\n")
+}

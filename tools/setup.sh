@@ -6,6 +6,8 @@
 #
 #   tools/setup.sh              loader + lavapipe, only if no Vulkan driver is present
 #   tools/setup.sh --ci         also the Khronos validation layer (used by .ci/run)
+#                               and Chromium (the `penumbra watch --serve` page test,
+#                               tests/watch_browser.rs, drives it headless)
 #
 # The backports suite is added on the mirror the machine already uses; no
 # mirror address is written here. Idempotent: a second run changes nothing.
@@ -65,6 +67,8 @@ else
 fi
 if [ "$want_layers" = 1 ]; then
   packages+=(vulkan-validationlayers)
+  # Headless browser for tests/watch_browser.rs.
+  packages+=(chromium)
 fi
 
 if [ "${#packages[@]}" -gt 0 ]; then

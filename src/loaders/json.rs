@@ -11,11 +11,11 @@ use glam::{DMat3, DMat4, DVec3, Vec3};
 use serde::Deserialize;
 
 use super::{LoadOptions, Loaded};
+use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::scene::{
     Camera, Checker, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, ShaderId,
     Shape, Sphere, Triangle,
 };
-use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::SceneError;
 
 /// Light samples per pass of an area light without a `samples` field.
@@ -505,7 +505,12 @@ impl Reader<'_> {
                         "the rectangle has zero area (an edge is zero or the edges are parallel)",
                     ));
                 }
-                LightKind::Rect { corner, edge1, edge2, samples: samples()? }
+                LightKind::Rect {
+                    corner,
+                    edge1,
+                    edge2,
+                    samples: samples()?,
+                }
             }
             LightType::Sphere => {
                 let radius = l.radius.unwrap_or_default();

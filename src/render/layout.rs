@@ -296,7 +296,12 @@ impl GpuScene {
                     gl.cone_scale = s as f32;
                     gl.cone_offset = (-co * s) as f32;
                 }
-                LightKind::Rect { corner, edge1, edge2, samples } => {
+                LightKind::Rect {
+                    corner,
+                    edge1,
+                    edge2,
+                    samples,
+                } => {
                     gl.kind = LIGHT_RECT;
                     gl.position = f3(corner - eye);
                     gl.edge1 = f3(edge1);
@@ -304,7 +309,11 @@ impl GpuScene {
                     gl.direction = f3(edge1.cross(edge2).normalize());
                     gl.samples = samples;
                 }
-                LightKind::Sphere { center, radius, samples } => {
+                LightKind::Sphere {
+                    center,
+                    radius,
+                    samples,
+                } => {
                     gl.kind = LIGHT_SPHERE;
                     gl.position = f3(center - eye);
                     gl.radius = radius as f32;

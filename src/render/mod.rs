@@ -471,7 +471,9 @@ impl Renderer {
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
         let read_counters = || -> Result<[u32; 2], RenderError> {
             let bytes = ctx.read_buffer(&scene.buffers[8])?;
-            Ok([0, 1].map(|i| u32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default())))
+            Ok([0, 1].map(|i| {
+                u32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default())
+            }))
         };
         // The counters wrap; per-pass differences in u64 do not.
         let mut before = read_counters()?;

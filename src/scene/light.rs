@@ -107,3 +107,20 @@ impl LightKind {
         a * a
     }
 }
+
+/// Lambert's formula for the form factor from a differential area at `p`
+/// with unit normal `n` to a planar polygon (vertices in order):
+/// `F = 1/(2π) Σᵢ βᵢ · n·ĝᵢ`, with βᵢ the angle edge i subtends at `p` and ĝᵢ
+/// the unit normal of the plane through `p` and that edge. For a rectangle
+/// light of area A and intensity I (unoccluded, fully above the horizon),
+/// the diffuse term converges to `k_d·I_d·I·π·F/A`.
+pub fn polygon_form_factor(p: DVec3, n: DVec3, polygon: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    for k in 0..polygon.len() {
+        let a = (polygon[k] - p).normalize();
+        let b = (polygon[(k + 1) % polygon.len()] - p).normalize();
+        let beta = a.dot(b).clamp(-1.0, 1.0).acos();
+        sum += beta * n.dot(a.cross(b).normalize_or_zero());
+    }
+    (sum / (2.0 * std::f64::consts::PI)).abs()
+}

@@ -70,7 +70,10 @@ fn colour(field: &str, c: Vec3) -> Result<(), Invalid> {
 fn samples_ok(field: &str, n: u32) -> Result<(), Invalid> {
     let max = super::MAX_LIGHT_SAMPLES;
     if n == 0 || n > max {
-        return Err(Invalid::new(field, format!("must be in 1..={max}, got {n}")));
+        return Err(Invalid::new(
+            field,
+            format!("must be in 1..={max}, got {n}"),
+        ));
     }
     Ok(())
 }
@@ -273,7 +276,12 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                     ));
                 }
             }
-            LightKind::Rect { corner, edge1, edge2, samples } => {
+            LightKind::Rect {
+                corner,
+                edge1,
+                edge2,
+                samples,
+            } => {
                 finite3(&f("corner"), corner)?;
                 finite3(&f("edge1"), edge1)?;
                 finite3(&f("edge2"), edge2)?;
@@ -286,10 +294,17 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                 }
                 samples_ok(&f("samples"), samples)?;
             }
-            LightKind::Sphere { center, radius, samples } => {
+            LightKind::Sphere {
+                center,
+                radius,
+                samples,
+            } => {
                 finite3(&f("center"), center)?;
                 if !(radius > 0.0 && radius.is_finite()) {
-                    return Err(Invalid::new(f("radius"), format!("must be positive, got {radius}")));
+                    return Err(Invalid::new(
+                        f("radius"),
+                        format!("must be positive, got {radius}"),
+                    ));
                 }
                 samples_ok(&f("samples"), samples)?;
             }

@@ -163,13 +163,18 @@ fn ms(d: Duration) -> String {
 /// set, sending an [`Event`] per reload. Returns an error only when it cannot
 /// start (no Vulkan device, unwritable output, address in use, no watcher);
 /// broken files and failed renders are reported and survived.
-pub fn run(opts: &WatchOptions, stop: Arc<AtomicBool>, events: Sender<Event>) -> anyhow::Result<()> {
+pub fn run(
+    opts: &WatchOptions,
+    stop: Arc<AtomicBool>,
+    events: Sender<Event>,
+) -> anyhow::Result<()> {
     let format = output::check_writable(&opts.output)?;
     let scene_path = normalise(&opts.scene);
     let shader_dir = match &opts.renderer.shaders {
-        ShaderSource::Directory(d) => Some(d.canonicalize().map_err(|e| {
-            anyhow::anyhow!("--shaders {}: {e}", d.display())
-        })?),
+        ShaderSource::Directory(d) => Some(
+            d.canonicalize()
+                .map_err(|e| anyhow::anyhow!("--shaders {}: {e}", d.display()))?,
+        ),
         ShaderSource::Embedded => None,
     };
     let mut ropts = opts.renderer.clone();
@@ -357,7 +362,12 @@ pub fn run(opts: &WatchOptions, stop: Arc<AtomicBool>, events: Sender<Event>) ->
                 .iter()
                 .chain(&session.shader_error)
                 .cloned()
-                .chain(errors.iter().filter(|e| e.starts_with("render error")).cloned())
+                .chain(
+                    errors
+                        .iter()
+                        .filter(|e| e.starts_with("render error"))
+                        .cloned(),
+                )
                 .collect::<Vec<_>>();
             let current = (!current.is_empty()).then(|| current.join("\n\n"));
             live.set_status(current, line.clone());
@@ -389,7 +399,11 @@ struct Output {
 impl Output {
     /// Writes a stage (scaled up to `full`) atomically; returns the encode
     /// and write times.
-    fn write(&mut self, frame: &StageFrame, full: (u32, u32)) -> Result<(Duration, Duration), String> {
+    fn write(
+        &mut self,
+        frame: &StageFrame,
+        full: (u32, u32),
+    ) -> Result<(Duration, Duration), String> {
         let t0 = Instant::now();
         let image = stage::upscale(&frame.image, full.0, full.1);
         let bytes = output::encode(&image, self.format)

@@ -157,7 +157,9 @@ fn accept(server: &tiny_http::Server, live: &Arc<Live>) {
             (tiny_http::Method::Get, "/image.png") => {
                 let png = live.snapshot().png;
                 if png.is_empty() {
-                    req.respond(tiny_http::Response::from_string("no image yet").with_status_code(404))
+                    req.respond(
+                        tiny_http::Response::from_string("no image yet").with_status_code(404),
+                    )
                 } else {
                     req.respond(
                         tiny_http::Response::from_data(png.as_slice())
@@ -190,7 +192,10 @@ fn header(name: &str, value: &str) -> tiny_http::Header {
 /// server stops.
 fn stream_events(mut w: Box<dyn Write + Send>, live: &Live, stopped: &AtomicBool) {
     let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n";
-    if w.write_all(head.as_bytes()).and_then(|_| w.flush()).is_err() {
+    if w.write_all(head.as_bytes())
+        .and_then(|_| w.flush())
+        .is_err()
+    {
         return;
     }
     let mut state = live.snapshot();
@@ -215,7 +220,10 @@ fn stream_events(mut w: Box<dyn Write + Send>, live: &Live, stopped: &AtomicBool
             }
             // A comment line keeps proxies and the client's idle timer happy
             // and notices a client that went away.
-            if w.write_all(b": keep-alive\n\n").and_then(|_| w.flush()).is_err() {
+            if w.write_all(b": keep-alive\n\n")
+                .and_then(|_| w.flush())
+                .is_err()
+            {
                 return;
             }
         }

@@ -59,7 +59,10 @@ impl Fixture {
     pub fn new() -> Fixture {
         let dir = tempfile::tempdir().unwrap();
         let shaders = dir.path().join("shaders");
-        copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders"), &shaders);
+        copy_dir(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders"),
+            &shaders,
+        );
         let scene = dir.path().join("scene.json");
         std::fs::write(&scene, scene_json(0.0, [0.8, 0.3, 0.2])).unwrap();
         let out = dir.path().join("out.png");
@@ -192,7 +195,10 @@ impl Running {
             match self.next_reload_within(left) {
                 Some(r) if pred(&r) => return r,
                 Some(_) => continue,
-                None => panic!("no reload with {what} within {TIMEOUT:?}; so far: {:#?}", self.reloads),
+                None => panic!(
+                    "no reload with {what} within {TIMEOUT:?}; so far: {:#?}",
+                    self.reloads
+                ),
             }
         }
     }
@@ -208,5 +214,108 @@ impl Drop for Running {
                 }
             }
         }
+    }
+}
+
+/// `penumbra watch` running as a child process; killed on drop.
+pub struct Child {
+    pub child: std::process::Child,
+    lines: Receiver<(bool, String)>,
+    /// Everything read so far: (from stderr, line).
+    pub seen: Vec<(bool, String)>,
+    /// Per stream (stdout, stderr): where the next wait starts in `seen`.
+    cursor: [usize; 2],
+}
+
+impl Child {
+    /// Starts `penumbra watch SCENE -o OUT --shaders DIR` plus `extra`.
+    pub fn start(fx: &Fixture, extra: &[&str]) -> Child {
+        use std::io::BufRead;
+        use std::process::{Command, Stdio};
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.arg("watch")
+            .arg(&fx.scene)
+            .arg("-o")
+            .arg(&fx.out)
+            .arg("--shaders")
+            .arg(&fx.shaders)
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        if std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1") {
+            cmd.arg("--validate");
+        }
+        let mut child = cmd.spawn().expect("start penumbra watch");
+        let (tx, lines) = std::sync::mpsc::channel();
+        let out = child.stdout.take().unwrap();
+        let err = child.stderr.take().unwrap();
+        let tx2 = tx.clone();
+        std::thread::spawn(move || {
+            for l in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+                let _ = tx.send((false, l));
+            }
+        });
+        std::thread::spawn(move || {
+            for l in std::io::BufReader::new(err).lines().map_while(Result::ok) {
+                let _ = tx2.send((true, l));
+            }
+        });
+        Child {
+            child,
+            lines,
+            seen: Vec::new(),
+            cursor: [0, 0],
+        }
+    }
+
+    /// Waits for a line of stdout (`err` false) or stderr (`err` true)
+    /// matching `pred`, after the last one matched on that stream; panics
+    /// after [`TIMEOUT`] or when the process ends.
+    pub fn wait_line(
+        &mut self,
+        what: &str,
+        err: bool,
+        mut pred: impl FnMut(&str) -> bool,
+    ) -> String {
+        let end = Instant::now() + TIMEOUT;
+        let mut at = self.cursor[err as usize];
+        loop {
+            while at < self.seen.len() {
+                let (is_err, l) = &self.seen[at];
+                at += 1;
+                if *is_err == err && pred(l) {
+                    self.cursor[err as usize] = at;
+                    return l.clone();
+                }
+            }
+            let left = end.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok((is_err, l)) => {
+                    eprintln!("{}{l}", if is_err { "[stderr] " } else { "" });
+                    self.seen.push((is_err, l));
+                }
+                Err(e) => panic!(
+                    "no line with {what} ({e:?}); exit: {:?}; output so far:\n{}",
+                    self.child.try_wait(),
+                    self.transcript()
+                ),
+            }
+        }
+    }
+
+    /// Everything read so far.
+    pub fn transcript(&self) -> String {
+        self.seen
+            .iter()
+            .map(|(e, l)| format!("{}{l}", if *e { "[stderr] " } else { "" }))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+}
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
     }
 }

@@ -46,11 +46,25 @@ pub struct CpuScene {
     prims: Vec<u32>,
 }
 
-/// A rendered image (RGBA, linear) with the ray counts.
+/// A rendered image (RGBA, linear) with its shadow-ray count.
 pub struct CpuFrame {
     pub pixels: Vec<[f32; 4]>,
-    pub primary_rays: u64,
     pub shadow_rays: u64,
+}
+
+/// What [`CpuScene::traversal_steps`] found.
+pub struct StepModel {
+    /// Mean traversal loop iterations per pixel (primary and shadow).
+    pub mean: f64,
+    /// Useful fraction of SIMD-8 lane-iterations.
+    pub utilisation: f64,
+}
+
+/// Traversal loop iterations of one pixel.
+#[derive(Default)]
+struct Steps {
+    primary: u32,
+    shadow: u32,
 }
 
 #[derive(Clone, Copy)]
@@ -133,18 +147,65 @@ impl CpuScene {
             .sum();
         CpuFrame {
             pixels,
-            primary_rays: width as u64 * height as u64,
             shadow_rays: shadow,
         }
     }
 
     fn pixel(&self, x: u32, y: u32, width: u32, height: u32, shadow_rays: &mut u64) -> [f32; 4] {
+        self.pixel_steps(x, y, width, height, shadow_rays, &mut Steps::default())
+    }
+
+    fn pixel_steps(
+        &self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+        shadow_rays: &mut u64,
+        steps: &mut Steps,
+    ) -> [f32; 4] {
         let ray = self.primary_ray(x, y, width, height);
-        let hit = self.closest_hit(ray);
+        let hit = self.closest_hit(ray, steps);
         if !hit.found {
             return self.background.extend(0.0).to_array();
         }
-        self.shade(ray, &hit, shadow_rays).extend(1.0).to_array()
+        self.shade(ray, &hit, shadow_rays, steps)
+            .extend(1.0)
+            .to_array()
+    }
+
+    /// A model of the kernel's SIMD efficiency on lavapipe, which runs an
+    /// 8×8 workgroup as SIMD groups of 8 invocations (one row of 8 pixels):
+    /// a loop runs until its slowest lane is done. Counts, per pixel, the
+    /// iterations of the primary and of the shadow traversal (node visits
+    /// plus triangle tests), and returns the mean count and the fraction of
+    /// lane-iterations doing useful work: Σ lanes / Σ groups 8·(max primary +
+    /// max shadow).
+    pub fn traversal_steps(&self, width: u32, height: u32) -> StepModel {
+        let rows: Vec<(u64, u64)> = (0..height)
+            .into_par_iter()
+            .map(|y| {
+                let (mut useful, mut issued) = (0u64, 0u64);
+                for x0 in (0..width).step_by(8) {
+                    let (mut max_p, mut max_s) = (0u32, 0u32);
+                    for x in x0..(x0 + 8).min(width) {
+                        let mut steps = Steps::default();
+                        self.pixel_steps(x, y, width, height, &mut 0, &mut steps);
+                        useful += (steps.primary + steps.shadow) as u64;
+                        max_p = max_p.max(steps.primary);
+                        max_s = max_s.max(steps.shadow);
+                    }
+                    issued += 8 * (max_p + max_s) as u64;
+                }
+                (useful, issued)
+            })
+            .collect();
+        let useful: u64 = rows.iter().map(|r| r.0).sum();
+        let issued: u64 = rows.iter().map(|r| r.1).sum();
+        StepModel {
+            mean: useful as f64 / (width as f64 * height as f64),
+            utilisation: useful as f64 / issued.max(1) as f64,
+        }
     }
 
     // shaders/camera.wgsl
@@ -166,7 +227,7 @@ impl CpuScene {
     }
 
     // shaders/hit.wgsl
-    fn closest_hit(&self, ray: Ray) -> Hit {
+    fn closest_hit(&self, ray: Ray, steps: &mut Steps) -> Hit {
         let mut hit = Hit {
             found: false,
             t: FAR,
@@ -188,7 +249,7 @@ impl CpuScene {
                 hit.index = i as u32;
             }
         }
-        self.bvh_closest(ray, &mut hit);
+        self.bvh_closest(ray, &mut hit, &mut steps.primary);
         if hit.found {
             self.finish_hit(ray, &mut hit);
         }
@@ -239,7 +300,7 @@ impl CpuScene {
     }
 
     // shaders/bvh.wgsl: nearest hit, nearest child first.
-    fn bvh_closest(&self, ray: Ray, hit: &mut Hit) {
+    fn bvh_closest(&self, ray: Ray, hit: &mut Hit, steps: &mut u32) {
         if self.nodes.is_empty() {
             return;
         }
@@ -250,6 +311,7 @@ impl CpuScene {
         let mut node_index = 0u32;
         let mut node_t = box_entry(&self.nodes[0], ray.origin, inv_dir, hit.t);
         loop {
+            *steps += 1;
             if node_t < hit.t {
                 let node = &self.nodes[node_index as usize];
                 if node.count == 0 {
@@ -269,6 +331,7 @@ impl CpuScene {
                     continue;
                 }
                 for i in node.index..node.index + node.count {
+                    *steps += 1;
                     let prim = self.prims[i as usize];
                     let h = intersect_triangle(&self.triangles[prim as usize], ray, hit.t);
                     if h[0] > 0.0 {
@@ -291,7 +354,7 @@ impl CpuScene {
     }
 
     // shaders/bvh.wgsl: any hit before t_max.
-    fn bvh_occluded(&self, ray: Ray, t_max: f32, start: &Hit) -> bool {
+    fn bvh_occluded(&self, ray: Ray, t_max: f32, start: &Hit, steps: &mut u32) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -303,6 +366,7 @@ impl CpuScene {
             return false;
         }
         loop {
+            *steps += 1;
             let node = &self.nodes[node_index as usize];
             if node.count == 0 {
                 let left = node_index + 1;
@@ -321,6 +385,7 @@ impl CpuScene {
                 }
             } else {
                 for i in node.index..node.index + node.count {
+                    *steps += 1;
                     let prim = self.prims[i as usize];
                     if start.kind == Kind::Triangle && start.index == prim {
                         continue;
@@ -340,7 +405,7 @@ impl CpuScene {
     }
 
     // shaders/shadows.wgsl (robust start, directional lights: t_max = FAR).
-    fn occluded(&self, hit: &Hit, to_light: Vec3, distance: f32) -> bool {
+    fn occluded(&self, hit: &Hit, to_light: Vec3, distance: f32, steps: &mut Steps) -> bool {
         if to_light.dot(hit.geometric_normal) <= 0.0 {
             return true;
         }
@@ -362,11 +427,11 @@ impl CpuScene {
                 return true;
             }
         }
-        self.bvh_occluded(ray, distance, hit)
+        self.bvh_occluded(ray, distance, hit, &mut steps.shadow)
     }
 
     // shaders/shading/shader.wgsl
-    fn shade(&self, ray: Ray, hit: &Hit, shadow_rays: &mut u64) -> Vec3 {
+    fn shade(&self, ray: Ray, hit: &Hit, shadow_rays: &mut u64, steps: &mut Steps) -> Vec3 {
         let node = &self.shaders[hit.shader as usize];
         let n = hit.shading_normal;
         let v = -ray.dir;
@@ -381,7 +446,7 @@ impl CpuScene {
                 continue;
             }
             *shadow_rays += 1;
-            if self.occluded(hit, l, distance) {
+            if self.occluded(hit, l, distance, steps) {
                 continue;
             }
             let lobe = if node.kind == SHADER_BLINN_PHONG {

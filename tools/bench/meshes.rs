@@ -93,7 +93,12 @@ pub fn bumpy_sphere(rings: u32, centre: DVec3, radius: f64) -> Mesh {
     let surface = |theta: f64, phi: f64| {
         let r = radius
             * (1.0 + 0.06 * (7.0 * theta).sin() * (5.0 * phi).sin() + 0.03 * (17.0 * phi).cos());
-        centre + r * DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+        centre
+            + r * DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            )
     };
     positions.push(surface(0.0, 0.0)); // north pole: vertex 0
     for i in 1..n {
@@ -129,7 +134,9 @@ pub fn bumpy_sphere(rings: u32, centre: DVec3, radius: f64) -> Mesh {
 
 /// The number of rings whose bumpy sphere has about `triangles` triangles.
 pub fn rings_for(triangles: u64) -> u32 {
-    ((1.0 + (1.0 + triangles as f64).sqrt()) / 2.0).round().max(3.0) as u32
+    ((1.0 + (1.0 + triangles as f64).sqrt()) / 2.0)
+        .round()
+        .max(3.0) as u32
 }
 
 /// The bunny scene with the bunny replaced by a bumpy sphere of about
@@ -141,7 +148,11 @@ pub fn sphere_scene(bunny: &Scene, triangles: u64) -> Scene {
     let (lo, hi) = mesh.bounds().expect("bunny has vertices");
     let extent = hi - lo;
     let radius = (extent.x + extent.y + extent.z) / 6.0;
-    let centre = DVec3::new((lo.x + hi.x) / 2.0, lo.y + radius * 1.1, (lo.z + hi.z) / 2.0);
+    let centre = DVec3::new(
+        (lo.x + hi.x) / 2.0,
+        lo.y + radius * 1.1,
+        (lo.z + hi.z) / 2.0,
+    );
     *mesh = bumpy_sphere(rings_for(triangles), centre, radius);
     scene
 }

@@ -1,0 +1,367 @@
+//! Area lights and sampling, checked against geometry and analytic values
+//! computed here: Lambert's polygon form factor, the penumbra width of a
+//! straight edge, and determinism of the sample pattern.
+
+mod support;
+
+use std::f64::consts::PI;
+
+use glam::{DMat3, DVec3, Vec3};
+use penumbra::render::{KernelOptions, Sampler, Sampling};
+use penumbra::scene::{
+    Camera, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, Shape, Triangle,
+};
+
+/// Orthographic camera at height 1 looking straight down (−Y) at the plane
+/// y = 0 (below any occluder of these tests), image up = −Z, covering x, z in
+/// [−half, half].
+fn top_down(half: f64, px: u32) -> Camera {
+    Camera {
+        position: DVec3::new(0.0, 1.0, 0.0),
+        orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
+        projection: Projection::Orthographic { half_height: half },
+        width: px,
+        height: px,
+    }
+}
+
+/// World point (x, 0, z) seen at the centre of pixel (i, j) of `top_down`.
+fn pixel_point(half: f64, px: u32, i: u32, j: u32) -> DVec3 {
+    let x = ((i as f64 + 0.5) / px as f64 * 2.0 - 1.0) * half;
+    let z = ((j as f64 + 0.5) / px as f64 * 2.0 - 1.0) * half;
+    DVec3::new(x, 0.0, z)
+}
+
+fn white_lambert() -> Shader {
+    Shader::Phong(Phong {
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+    })
+}
+
+fn rect(corner: DVec3, edge1: DVec3, edge2: DVec3, samples: u32) -> Light {
+    Light {
+        kind: LightKind::Rect {
+            corner,
+            edge1,
+            edge2,
+            samples,
+        },
+        intensity: 1.0,
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+    }
+}
+
+/// Lambert's formula for the form factor from a differential area at `p`
+/// with normal `n` to a polygon: F = 1/(2π) Σ βᵢ n·ĝᵢ, βᵢ the angle the edge
+/// subtends and ĝᵢ the unit normal of the plane through p and the edge.
+fn form_factor(p: DVec3, n: DVec3, polygon: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    for k in 0..polygon.len() {
+        let a = (polygon[k] - p).normalize();
+        let b = (polygon[(k + 1) % polygon.len()] - p).normalize();
+        let beta = a.dot(b).clamp(-1.0, 1.0).acos();
+        sum += beta * n.dot(a.cross(b).normalize());
+    }
+    (sum / (2.0 * PI)).abs()
+}
+
+fn render_with(
+    scene: &Scene,
+    kernel: KernelOptions,
+    sampling: Sampling,
+) -> penumbra::render::Frame {
+    scene.validate().expect("valid");
+    let mut r = support::renderer();
+    let before = r.kernel();
+    r.set_kernel(kernel);
+    let result = r.upload(scene).and_then(|up| {
+        let (w, h) = up.size();
+        r.render_progressive(&up, w, h, &sampling, &mut |_| {})
+    });
+    r.set_kernel(before);
+    result.expect("render")
+}
+
+/// RMS relative error over the image against π·F/A (unit light over a
+/// white Lambert plane: N point lights of 1/N weighted by the emitter cosine
+/// converge to (1/A)∫cosθₑcosθᵣ/r² dA = πF/A).
+fn convergence_error(samples: u32, sampler: Sampler) -> f64 {
+    let (half, px) = (1.0, 24);
+    let corner = DVec3::new(-0.5, 1.0, -0.5);
+    let (e1, e2) = (DVec3::X, DVec3::Z); // e1 × e2 = −Y: emits downwards
+    let scene = Scene {
+        camera: top_down(half, px),
+        background: Vec3::ZERO,
+        shaders: vec![white_lambert()],
+        objects: vec![Object {
+            shape: Shape::Plane(Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+            }),
+            shader: 0,
+        }],
+        lights: vec![rect(corner, e1, e2, samples)],
+    };
+    let kernel = KernelOptions {
+        sampler,
+        ..Default::default()
+    };
+    let frame = render_with(&scene, kernel, Sampling::default());
+    let polygon = [corner, corner + e1, corner + e1 + e2, corner + e2];
+    let mut sq = 0.0;
+    for j in 0..px {
+        for i in 0..px {
+            let want = PI * form_factor(pixel_point(half, px, i, j), DVec3::Y, &polygon);
+            let got = frame.image.at(i, j)[0] as f64;
+            sq += ((got - want) / want).powi(2);
+        }
+    }
+    (sq / (px * px) as f64).sqrt()
+}
+
+/// Least-squares slope of log(error) against log(samples).
+fn slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|(s, e)| (s.ln(), e.ln())).unzip();
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let num: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let den: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+    num / den
+}
+
+#[test]
+fn rect_light_converges_to_lamberts_form_factor() {
+    let counts = [4u32, 16, 64, 256, 1024];
+    let mut random = Vec::new();
+    let mut stratified = Vec::new();
+    for &n in &counts {
+        random.push((n as f64, convergence_error(n, Sampler::Random)));
+        stratified.push((n as f64, convergence_error(n, Sampler::Stratified)));
+    }
+    eprintln!("random {random:?}\nstratified {stratified:?}");
+    let (sr, ss) = (slope(&random), slope(&stratified));
+    eprintln!("slopes: random {sr:.3}, stratified {ss:.3}");
+    // Independent samples: error ∝ N^(−1/2).
+    assert!((-0.65..=-0.35).contains(&sr), "random slope {sr}");
+    // Low-discrepancy samples of a smooth integrand converge clearly faster.
+    assert!(ss < -0.75, "stratified slope {ss}");
+    assert!(
+        stratified[4].1 < random[4].1 / 4.0,
+        "stratified {:?} vs random {:?}",
+        stratified[4],
+        random[4]
+    );
+    // And the limit is right: at 1024 stratified samples within 0.5 %.
+    assert!(stratified[4].1 < 5e-3, "{:?}", stratified[4]);
+}
+
+/// A long rectangular light of width `w` at height `big_h` over an occluding
+/// half-plane x < 0 at height `h`: the penumbra on the ground runs from
+/// x = −(w/2)·h/(H−h) to +(w/2)·h/(H−h).
+fn penumbra_scene(with_occluder: bool) -> Scene {
+    let (w, big_h, h, len) = (2.0, 4.0, 2.0, 40.0);
+    let mut objects = vec![Object {
+        shape: Shape::Plane(Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Y,
+        }),
+        shader: 0,
+    }];
+    if with_occluder {
+        let (a, b, c, d) = (
+            DVec3::new(-100.0, h, -100.0),
+            DVec3::new(0.0, h, -100.0),
+            DVec3::new(0.0, h, 100.0),
+            DVec3::new(-100.0, h, 100.0),
+        );
+        objects.push(Object {
+            shape: Shape::Triangle(Triangle {
+                vertices: [a, b, c],
+            }),
+            shader: 0,
+        });
+        objects.push(Object {
+            shape: Shape::Triangle(Triangle {
+                vertices: [a, c, d],
+            }),
+            shader: 0,
+        });
+    }
+    Scene {
+        camera: top_down(2.0, 200),
+        background: Vec3::ZERO,
+        shaders: vec![white_lambert()],
+        objects,
+        // edge1 × edge2 = (w,0,0) × (0,0,len) = (0, −w·len, 0): emits downwards.
+        lights: vec![rect(
+            DVec3::new(-w / 2.0, big_h, -len / 2.0),
+            DVec3::new(w, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, len),
+            1024,
+        )],
+    }
+}
+
+#[test]
+fn penumbra_rises_monotonically_and_has_the_geometric_width() {
+    let sampling = Sampling {
+        spp: 4,
+        ..Default::default()
+    };
+    let shadowed = render_with(&penumbra_scene(true), KernelOptions::default(), sampling);
+    let free = render_with(&penumbra_scene(false), KernelOptions::default(), sampling);
+    let row = 100; // z ≈ 0
+    let v: Vec<f64> = (0..200)
+        .map(|i| shadowed.image.at(i, row)[0] as f64)
+        .collect();
+    let f: Vec<f64> = (0..200).map(|i| free.image.at(i, row)[0] as f64).collect();
+    let x = |i: usize| pixel_point(2.0, 200, i as u32, row).x;
+    // Umbra: no light at all; fully lit: equal to the unoccluded render.
+    let umbra_end = (0..200).rposition(|i| v[i] == 0.0).expect("an umbra");
+    let lit_start = (0..200)
+        .position(|i| (v[i] - f[i]).abs() <= 1e-3 * f[i])
+        .expect("a lit region");
+    // (w/2)·h/(H−h) = 1 · 2 / 2 = 1: the penumbra spans x in [−1, 1], 100 pixels.
+    let pixel = 4.0 / 200.0;
+    assert!(
+        (x(umbra_end) - -1.0).abs() <= 2.0 * pixel,
+        "umbra ends at x = {}",
+        x(umbra_end)
+    );
+    assert!(
+        (x(lit_start) - 1.0).abs() <= 2.0 * pixel,
+        "full light starts at x = {}",
+        x(lit_start)
+    );
+    for i in umbra_end..lit_start {
+        assert!(
+            v[i + 1] > v[i],
+            "not rising at x = {}: {} then {}",
+            x(i),
+            v[i],
+            v[i + 1]
+        );
+    }
+}
+
+#[test]
+fn same_seed_same_image_other_seed_other_image() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/area_lights.json");
+    let mut scene = support::load(&path);
+    scene.camera.width = 96;
+    scene.camera.height = 54;
+    for l in &mut scene.lights {
+        l.kind.set_samples(4);
+    }
+    let s = |seed| Sampling {
+        spp: 3,
+        seed,
+        time_budget: None,
+    };
+    let a = render_with(&scene, KernelOptions::default(), s(0));
+    let b = render_with(&scene, KernelOptions::default(), s(0));
+    let c = render_with(&scene, KernelOptions::default(), s(1));
+    let bits = |f: &penumbra::render::Frame| {
+        f.image
+            .pixels
+            .iter()
+            .flatten()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a), bits(&b), "same seed, same bytes");
+    assert_ne!(bits(&a), bits(&c), "another seed changes the image");
+    assert_eq!(a.stats.passes, 3);
+}
+
+#[test]
+fn time_budget_stops_after_the_pass_in_flight() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/area_lights.json");
+    let mut scene = support::load(&path);
+    scene.camera.width = 64;
+    scene.camera.height = 36;
+    let sampling = Sampling {
+        spp: 10_000,
+        seed: 0,
+        time_budget: Some(std::time::Duration::from_millis(1)),
+    };
+    let frame = render_with(&scene, KernelOptions::default(), sampling);
+    assert!(
+        frame.stats.passes >= 1 && frame.stats.passes < 10_000,
+        "{} passes",
+        frame.stats.passes
+    );
+    // The image is the mean of the passes done: bounded like a single pass.
+    assert!(frame
+        .image
+        .pixels
+        .iter()
+        .all(|p| p.iter().all(|c| c.is_finite()) && p[3] <= 1.0));
+}
+
+#[test]
+fn spp_one_is_the_pixel_centre_image() {
+    // Area-light-free scenes with one sample per pixel render exactly as the
+    // core renderer always did (the sampling code is not compiled in).
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.json");
+    let mut scene = support::load(&path);
+    scene.camera.width = 120;
+    scene.camera.height = 68;
+    assert!(!scene.features().area_lights);
+    let one = render_with(&scene, KernelOptions::default(), Sampling::default());
+    let plain = support::render(&scene);
+    assert_eq!(one.image, plain.image);
+    // Several samples per pixel average sub-pixel positions: edges change.
+    let four = render_with(
+        &scene,
+        KernelOptions::default(),
+        Sampling {
+            spp: 4,
+            ..Default::default()
+        },
+    );
+    assert_ne!(four.image, one.image);
+    assert_eq!(four.stats.primary_rays, 4 * 120 * 68);
+}
+
+#[test]
+fn sphere_light_far_away_acts_like_a_point_light() {
+    // N points of I/N on a small sphere converge to a point light of I at its
+    // centre (no emitter cosine for spheres).
+    let mut scene = Scene {
+        camera: top_down(1.0, 16),
+        background: Vec3::ZERO,
+        shaders: vec![white_lambert()],
+        objects: vec![Object {
+            shape: Shape::Plane(Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+            }),
+            shader: 0,
+        }],
+        lights: vec![Light {
+            kind: LightKind::Sphere {
+                center: DVec3::new(0.3, 3.0, -0.2),
+                radius: 0.01,
+                samples: 64,
+            },
+            intensity: 2.0,
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+        }],
+    };
+    let sphere = render_with(&scene, KernelOptions::default(), Sampling::default());
+    scene.lights[0].kind = LightKind::Point {
+        position: DVec3::new(0.3, 3.0, -0.2),
+    };
+    let point = support::render(&scene);
+    for (a, b) in sphere.image.pixels.iter().zip(&point.image.pixels) {
+        assert!((a[0] - b[0]).abs() <= 1e-3 * b[0], "{} vs {}", a[0], b[0]);
+    }
+}

@@ -1,0 +1,232 @@
+//! `docs/scaling.png`: the scaling curves, drawn with plotters into an RGB
+//! buffer and written with the `image` crate. Text needs a TrueType font;
+//! plotters' `ab_glyph` backend takes one registered at run time (no system
+//! font lookup): DejaVu Sans from Debian's fonts-dejavu-core, or the file
+//! named by `PENUMBRA_BENCH_FONT`.
+
+use std::path::Path;
+
+use anyhow::Context as _;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::Results;
+
+const FONT_PATHS: &[&str] = &[
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+];
+
+fn register_font() -> anyhow::Result<()> {
+    let from_env = std::env::var("PENUMBRA_BENCH_FONT").ok();
+    let path = from_env
+        .iter()
+        .map(String::as_str)
+        .chain(FONT_PATHS.iter().copied())
+        .find(|p| Path::new(p).is_file())
+        .context(
+            "the plot needs a TrueType font: install fonts-dejavu-core or set PENUMBRA_BENCH_FONT",
+        )?;
+    let bytes: &'static [u8] = Vec::leak(std::fs::read(path)?);
+    plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+        .map_err(|_| anyhow::anyhow!("{path} is not a usable TrueType font"))?;
+    Ok(())
+}
+
+type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("plot: {e:?}")
+}
+
+fn upper(v: impl Iterator<Item = f64>) -> f64 {
+    v.fold(0.0, f64::max) * 1.15
+}
+
+/// A panel with a log x axis (triangles) and two series on a linear y axis.
+fn log_panel(
+    area: &Area,
+    title: &str,
+    y_label: &str,
+    series: &[(&str, RGBColor, Vec<(f64, f64)>)],
+) -> anyhow::Result<()> {
+    let xs = series.iter().flat_map(|s| s.2.iter().map(|p| p.0));
+    let (x0, x1) = (
+        xs.clone().fold(f64::INFINITY, f64::min) * 0.7,
+        xs.fold(0.0, f64::max) * 1.4,
+    );
+    let y1 = upper(series.iter().flat_map(|s| s.2.iter().map(|p| p.1)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((x0..x1).log_scale(), 0.0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("triangles (log scale)")
+        .y_desc(y_label)
+        .x_label_formatter(&|x| format_count(*x))
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    for (name, colour, points) in series {
+        let c = *colour;
+        chart
+            .draw_series(LineSeries::new(points.clone(), c.stroke_width(2)))
+            .map_err(err)?
+            .label(*name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+        chart
+            .draw_series(points.iter().map(|p| Circle::new(*p, 4, c.filled())))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// A panel with linear axes and one series.
+fn linear_panel(
+    area: &Area,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    points: &[(f64, f64)],
+    colour: RGBColor,
+) -> anyhow::Result<()> {
+    let x1 = upper(points.iter().map(|p| p.0));
+    let y1 = upper(points.iter().map(|p| p.1));
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..x1, 0.0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    chart
+        .draw_series(LineSeries::new(points.to_vec(), colour.stroke_width(2)))
+        .map_err(err)?;
+    chart
+        .draw_series(points.iter().map(|p| Circle::new(*p, 4, colour.filled())))
+        .map_err(err)?;
+    Ok(())
+}
+
+fn format_count(x: f64) -> String {
+    if x >= 1e6 {
+        format!("{}M", x / 1e6)
+    } else if x >= 1e3 {
+        format!("{}k", x / 1e3)
+    } else {
+        format!("{x}")
+    }
+}
+
+/// Draws the four scaling panels into `path`.
+pub fn scaling(r: &Results, path: &Path) -> anyhow::Result<()> {
+    register_font()?;
+    let (w, h) = (1400u32, 1000u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let (title, body) = root.split_vertically(40);
+        title
+            .titled(
+                &format!(
+                    "penumbra on {} — {} — {}",
+                    r.throughput.device.name, r.throughput.device.driver_info, r.date
+                ),
+                ("sans-serif", 18),
+            )
+            .map_err(err)?;
+        let panels = body.split_evenly((2, 2));
+        let tri = &r.scaling.triangles;
+        let blue = RGBColor(31, 119, 180);
+        let orange = RGBColor(255, 127, 14);
+        let green = RGBColor(44, 160, 44);
+        let red = RGBColor(214, 39, 40);
+        log_panel(
+            &panels[0],
+            "Time vs triangles (1024×1024, BVH)",
+            "milliseconds",
+            &[
+                (
+                    "render, ms/frame (median)",
+                    blue,
+                    tri.iter()
+                        .map(|t| (t.triangles as f64, t.render_ms.median))
+                        .collect(),
+                ),
+                (
+                    "BVH build, ms",
+                    orange,
+                    tri.iter()
+                        .map(|t| (t.triangles as f64, t.bvh_build_ms))
+                        .collect(),
+                ),
+            ],
+        )?;
+        log_panel(
+            &panels[1],
+            "BVH memory vs triangles",
+            "MiB (nodes + primitive references)",
+            &[(
+                "BVH memory, MiB",
+                green,
+                tri.iter()
+                    .map(|t| (t.triangles as f64, t.bvh_bytes as f64 / 1048576.0))
+                    .collect(),
+            )],
+        )?;
+        let px: Vec<(f64, f64)> = r
+            .scaling
+            .pixels
+            .iter()
+            .map(|p| (p.width as f64 * p.height as f64 / 1e6, p.render_ms.median))
+            .collect();
+        linear_panel(
+            &panels[2],
+            "Time vs pixels (bunny scene)",
+            "megapixels",
+            "ms/frame (median)",
+            &px,
+            blue,
+        )?;
+        let lights: Vec<(f64, f64)> = r
+            .scaling
+            .lights
+            .iter()
+            .map(|l| (l.lights as f64, l.render_ms.median))
+            .collect();
+        linear_panel(
+            &panels[3],
+            "Time vs directional lights (bunny, 1024×1024)",
+            "lights",
+            "ms/frame (median)",
+            &lights,
+            red,
+        )?;
+        root.present().map_err(err)?;
+    }
+    image::save_buffer(path, &buf, w, h, image::ExtendedColorType::Rgb8)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
