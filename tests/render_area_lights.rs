@@ -32,6 +32,23 @@ fn pixel_point(half: f64, px: u32, i: u32, j: u32) -> DVec3 {
     DVec3::new(x, 0.0, z)
 }
 
+/// A white Lambert plane y = 0 under `lights`.
+fn lambert_plane(camera: Camera, lights: Vec<Light>) -> Scene {
+    Scene {
+        camera,
+        background: Vec3::ZERO,
+        shaders: vec![white_lambert()],
+        objects: vec![Object {
+            shape: Shape::Plane(Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+            }),
+            shader: 0,
+        }],
+        lights,
+    }
+}
+
 fn white_lambert() -> Shader {
     Shader::Phong(Phong {
         ambient: Vec3::ZERO,
@@ -94,19 +111,7 @@ fn convergence_error(samples: u32, sampler: Sampler) -> f64 {
     let (half, px) = (1.0, 24);
     let corner = DVec3::new(-0.5, 1.0, -0.5);
     let (e1, e2) = (DVec3::X, DVec3::Z); // e1 × e2 = −Y: emits downwards
-    let scene = Scene {
-        camera: top_down(half, px),
-        background: Vec3::ZERO,
-        shaders: vec![white_lambert()],
-        objects: vec![Object {
-            shape: Shape::Plane(Plane {
-                point: DVec3::ZERO,
-                normal: DVec3::Y,
-            }),
-            shader: 0,
-        }],
-        lights: vec![rect(corner, e1, e2, samples)],
-    };
+    let scene = lambert_plane(top_down(half, px), vec![rect(corner, e1, e2, samples)]);
     let kernel = KernelOptions {
         sampler,
         ..Default::default()
@@ -333,18 +338,9 @@ fn spp_one_is_the_pixel_centre_image() {
 fn sphere_light_far_away_acts_like_a_point_light() {
     // N points of I/N on a small sphere converge to a point light of I at its
     // centre (no emitter cosine for spheres).
-    let mut scene = Scene {
-        camera: top_down(1.0, 16),
-        background: Vec3::ZERO,
-        shaders: vec![white_lambert()],
-        objects: vec![Object {
-            shape: Shape::Plane(Plane {
-                point: DVec3::ZERO,
-                normal: DVec3::Y,
-            }),
-            shader: 0,
-        }],
-        lights: vec![Light {
+    let mut scene = lambert_plane(
+        top_down(1.0, 16),
+        vec![Light {
             kind: LightKind::Sphere {
                 center: DVec3::new(0.3, 3.0, -0.2),
                 radius: 0.01,
@@ -355,7 +351,7 @@ fn sphere_light_far_away_acts_like_a_point_light() {
             diffuse: Vec3::ONE,
             specular: Vec3::ZERO,
         }],
-    };
+    );
     let sphere = render_with(&scene, KernelOptions::default(), Sampling::default());
     scene.lights[0].kind = LightKind::Point {
         position: DVec3::new(0.3, 3.0, -0.2),

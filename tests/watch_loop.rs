@@ -249,3 +249,85 @@ fn a_broken_scene_keeps_the_last_image_and_recovers() {
     let c = fx.centre();
     assert!(c[2] > 200 && c[0] < 150, "{c:?}");
 }
+
+#[test]
+fn a_newer_edit_cancels_the_refinement() {
+    use penumbra::render::{Renderer, RendererOptions};
+    use penumbra::watch::stage::{Changes, Session};
+    let fx = Fixture::new();
+    let renderer = Renderer::new(&RendererOptions {
+        shaders: penumbra::render::ShaderSource::Directory(fx.shaders.clone()),
+        ..Default::default()
+    })
+    .expect("GPU tests need a Vulkan device (tools/setup.sh installs lavapipe)");
+    let mut s = Session::new(renderer, &fx.scene, Default::default());
+    let applied = s.apply(Changes {
+        shaders: true,
+        scene: true,
+    });
+    assert!(applied.render && applied.errors.is_empty(), "{applied:?}");
+    // The loop asks the watcher between stages; a pending edit stops it
+    // after the preview.
+    let mut written = Vec::new();
+    let mut asked = 0;
+    let cancelled = s
+        .render_stages(
+            &[4, 1],
+            || {
+                asked += 1;
+                true
+            },
+            |f| written.push((f.image.width, f.image.height)),
+        )
+        .unwrap();
+    assert!(cancelled);
+    assert_eq!(asked, 1);
+    assert_eq!(written, [(16, 12)]);
+    // Nothing pending: both stages.
+    written.clear();
+    let cancelled = s
+        .render_stages(
+            &[4, 1],
+            || false,
+            |f| written.push((f.image.width, f.image.height)),
+        )
+        .unwrap();
+    assert!(!cancelled);
+    assert_eq!(written, [(16, 12), (64, 48)]);
+}
+
+#[test]
+fn the_watcher_sees_edits_between_stages_and_debounces() {
+    use penumbra::watch::files::{normalise, FileWatcher, WatchSet};
+    use std::sync::atomic::AtomicBool;
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.wgsl");
+    let other = dir.path().join("other.png");
+    std::fs::write(&a, "1").unwrap();
+    let set = WatchSet {
+        scene: Default::default(),
+        shaders: [normalise(&a)].into_iter().collect(),
+    };
+    let mut w = FileWatcher::new(set, Duration::from_millis(30)).unwrap();
+    assert!(!w.pending());
+    // Files beside ours, and reading ours, are not changes.
+    std::fs::write(&other, "x").unwrap();
+    let _ = std::fs::read(&a).unwrap();
+    let end = std::time::Instant::now() + Duration::from_millis(300);
+    while std::time::Instant::now() < end {
+        assert!(!w.pending(), "an unrelated event counted as a change");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    for i in 0..5 {
+        std::fs::write(&a, format!("{i}")).unwrap();
+    }
+    let end = std::time::Instant::now() + TIMEOUT;
+    while !w.pending() {
+        assert!(std::time::Instant::now() < end, "no event for the edit");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let stop = AtomicBool::new(false);
+    let b = w.next_batch(&stop).unwrap();
+    assert_eq!(b.paths.into_iter().collect::<Vec<_>>(), [normalise(&a)]);
+    assert!(!w.pending(), "five writes, one batch");
+}

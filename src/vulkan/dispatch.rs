@@ -40,7 +40,7 @@ pub(crate) unsafe fn memory_barrier(
 }
 
 impl Context {
-    /// Binds buffers[i] at binding i of set 0 (must match the pipeline's bindings in number and
+    /// Binds `buffers[i]` at binding `i` of set 0 (must match the pipeline's bindings in number and
     /// usage), pushes `push_constants` (len == the pipeline's push_constant_size), dispatches
     /// `groups` workgroups, submits and waits for completion. Returns the wall time from submit
     /// to fence signalled.

@@ -97,7 +97,7 @@ fn check_spirv(spirv: &[u32], name: &str) -> Result<(), VulkanError> {
 
 impl Context {
     /// Creates a compute pipeline with one descriptor set (set 0) whose binding i has type
-    /// bindings[i], and a push-constant range of `push_constant_size` bytes (0 = none) visible to
+    /// `bindings[i]`, and a push-constant range of `push_constant_size` bytes (0 = none) visible to
     /// the compute stage.
     pub fn create_compute_pipeline(
         &self,

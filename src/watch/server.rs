@@ -280,3 +280,27 @@ const PAGE: &str = r#"<!doctype html>
 </body>
 </html>
 "#;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses() {
+        assert_eq!(
+            parse_addr("127.0.0.1:8737").unwrap().to_string(),
+            "127.0.0.1:8737"
+        );
+        assert_eq!(parse_addr("9000").unwrap().to_string(), "127.0.0.1:9000");
+        assert_eq!(parse_addr(":9000").unwrap().to_string(), "127.0.0.1:9000");
+        assert_eq!(parse_addr("0.0.0.0").unwrap().to_string(), "0.0.0.0:8737");
+        assert_eq!(parse_addr("[::1]:80").unwrap().to_string(), "[::1]:80");
+        assert!(parse_addr("not an address").is_err());
+    }
+
+    #[test]
+    fn the_page_listens_and_does_not_poll() {
+        assert!(PAGE.contains("new EventSource('/events')"));
+        assert!(!PAGE.contains("setInterval") && !PAGE.contains("setTimeout"));
+    }
+}
