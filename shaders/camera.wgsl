@@ -24,7 +24,7 @@ fn primary_ray(cam: Camera, px: vec2<u32>, image_size: vec2<u32>, sub: vec2<f32>
     );
     let offset = ndc.x * cam.right + ndc.y * cam.up;
     if cam.orthographic != 0u {
-        return Ray(offset, cam.forward);
+        return make_ray(offset, cam.forward);
     }
-    return Ray(vec3<f32>(0.0), normalize(cam.forward + offset));
+    return make_ray(vec3<f32>(0.0), normalize(cam.forward + offset));
 }

@@ -105,7 +105,7 @@ fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
         }
         default: {
             let tri = triangles[(*hit).index];
-            ng = normalize(cross(tri.e1, tri.e2));
+            ng = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
             ns = triangle_shading_normal(tri, ng, (*hit).u, (*hit).v);
             (*hit).shader = tri.shader;
         }

@@ -1,7 +1,38 @@
-// A ray: origin and unit direction.
+// A ray: origin and unit direction, and what the watertight triangle test
+// needs of it, computed once per ray (Woop, Benthin and Wald, "Watertight
+// Ray/Triangle Intersection", JCGT 2013): the axis along which |dir| is
+// largest (kz), the two others (kx, ky, swapped when dir[kz] < 0 to keep the
+// winding), and the shear that maps dir onto +z.
 struct Ray {
     origin: vec3<f32>,
     dir: vec3<f32>,
+    axes: vec3<u32>,
+    shear: vec3<f32>,
+}
+
+fn make_ray(origin: vec3<f32>, dir: vec3<f32>) -> Ray {
+    var ray: Ray;
+    ray.origin = origin;
+    ray.dir = dir;
+    if TRIANGLE_TEST == TRIANGLE_WATERTIGHT {
+        let a = abs(dir);
+        var kz = 2u;
+        if a.x > a.y && a.x > a.z {
+            kz = 0u;
+        } else if a.y > a.z {
+            kz = 1u;
+        }
+        var kx = (kz + 1u) % 3u;
+        var ky = (kx + 1u) % 3u;
+        if dir[kz] < 0.0 {
+            let swap = kx;
+            kx = ky;
+            ky = swap;
+        }
+        ray.axes = vec3<u32>(kx, ky, kz);
+        ray.shear = vec3<f32>(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+    }
+    return ray;
 }
 
 // Farther than anything in a scene; used as "no hit yet" and as the length

@@ -43,7 +43,7 @@ fn occluded(hit: Hit, ls: LightSample) -> bool {
     } else if hit.kind == KIND_TRIANGLE {
         origin = offset_ray_origin(hit.position, hit.geometric_normal);
     }
-    let ray = Ray(origin, ls.to_light);
+    let ray = make_ray(origin, ls.to_light);
     let t_max = ls.distance;
     if HAS_PLANES {
         for (var i = 0u; i < globals.num_planes; i++) {

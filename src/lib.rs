@@ -22,9 +22,11 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
+pub mod brdf;
 pub mod bvh;
 pub mod error;
 pub mod loaders;
+pub mod metrics;
 pub mod output;
 pub mod render;
 pub mod scene;

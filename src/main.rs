@@ -35,6 +35,28 @@ enum Command {
     /// Render a scene, then re-render whenever it, a file it references or a
     /// shader changes (hot reload), until Ctrl-C.
     Watch(WatchArgs),
+    /// Compare two renders (.png or .exr of the same size): print error metrics
+    /// (`name: value`, one a line) and optionally write a FLIP false-colour map.
+    Diff(DiffArgs),
+}
+
+#[derive(clap::Args)]
+struct DiffArgs {
+    /// The reference image (.png, read as sRGB; .exr, read as linear).
+    a: PathBuf,
+    /// The image to compare with it.
+    b: PathBuf,
+    /// Write the per-pixel FLIP difference in false colour (magma) here, atomically.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+fn diff(args: DiffArgs) -> anyhow::Result<()> {
+    let m = penumbra::metrics::diff_files(&args.a, &args.b, args.output.as_deref())?;
+    for line in m.lines() {
+        println!("{line}");
+    }
+    Ok(())
 }
 
 #[derive(clap::Args)]
@@ -97,8 +119,9 @@ struct RenderArgs {
     /// How rays find spheres and triangles: `bvh` or `brute-force`.
     #[arg(long, default_value = "bvh")]
     accel: Accel,
-    /// Ray/triangle test order: `uv-first` (the seminar's) or `t-first`.
-    #[arg(long, default_value = "uv-first")]
+    /// Ray/triangle test: `watertight` (Woop et al., u,v before t), or
+    /// Möller–Trumbore `uv-first` (the seminar's) or `t-first`.
+    #[arg(long, default_value = "watertight")]
     triangle_test: TriangleTest,
     /// Samples per pixel (one pass each): 1 goes through the pixel centre,
     /// more are stratified over the pixel (box filter).
@@ -311,6 +334,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Devices => devices(),
         Command::Watch(args) => watch(args),
+        Command::Diff(args) => diff(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -102,7 +102,11 @@ fn bvh_and_brute_force_and_both_triangle_orders_agree() {
     scene.camera.height = 96;
     let mut images = Vec::new();
     for accel in [Accel::Bvh, Accel::BruteForce] {
-        for triangle_test in [TriangleTest::UvFirst, TriangleTest::TFirst] {
+        for triangle_test in [
+            TriangleTest::Watertight,
+            TriangleTest::UvFirst,
+            TriangleTest::TFirst,
+        ] {
             let mut r = support::renderer();
             let before = r.kernel();
             r.set_kernel(KernelOptions {

@@ -1,5 +1,5 @@
 //! End to end: `penumbra watch --serve` driven in headless Chromium (Debian's
-//! `chromium`, installed by `tools/setup.sh --ci`) over the DevTools protocol
+//! `chromium`, installed by `tools/setup.sh --tests`) over the DevTools protocol
 //! on a pipe (`--remote-debugging-pipe`: no WebSocket client needed). A
 //! shader edit must change the image on the page, a broken shader must show
 //! its error over the last good image, and the fix must clear it.
@@ -33,7 +33,7 @@ fn find_chromium() -> std::path::PathBuf {
             return p.into();
         }
     }
-    panic!("this test needs Debian's chromium: run `tools/setup.sh --ci` (or apt-get install chromium)");
+    panic!("this test needs Debian's chromium: run `tools/setup.sh --tests` (or apt-get install chromium)");
 }
 
 fn pipe() -> (i32, i32) {

@@ -237,6 +237,44 @@ pub struct CpuPart {
     pub mean_steps: f64,
 }
 
+/// How long a child process ran and how busy the rest of the machine was.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct PartInfo {
+    pub part: String,
+    pub env: Vec<(String, String)>,
+    pub wall_s: f64,
+    /// CPU time of the benchmark's child process over its wall time (cores).
+    pub own_cores: f64,
+    /// CPU time of everything else on the machine over the same wall time
+    /// (cores): other processes competing for the 2 cores.
+    pub other_cores: f64,
+}
+
+/// One lavapipe setting, measured in several child processes interleaved
+/// with the other settings.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Knob {
+    pub env: Vec<(String, String)>,
+    pub device_name: String,
+    pub driver_compile_ms: Vec<f64>,
+    /// Every measured frame of every round.
+    pub render_ms: Stat,
+    /// Per round: the default setting's median / this setting's median.
+    pub speedup_vs_default: Stat,
+}
+
+/// Where the time of a bunny run goes, from `perf record -e cpu-clock`.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct Profile {
+    /// Why there is none, when there is none.
+    pub skipped: Option<String>,
+    pub samples: u64,
+    /// (shared object, percent of samples), largest first.
+    pub dsos: Vec<(String, f64)>,
+    /// (symbol, percent), largest first: the top of the non-JIT code.
+    pub symbols: Vec<(String, f64)>,
+}
+
 /// Everything one run measured.
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
 pub struct Results {
@@ -247,8 +285,11 @@ pub struct Results {
     pub command: String,
     pub quick: bool,
     pub wall_s: f64,
+    pub parts: Vec<PartInfo>,
     pub throughput: ThroughputPart,
-    pub knobs: Vec<ThroughputPart>,
+    pub knob_rounds: usize,
+    pub knobs: Vec<Knob>,
+    pub profile: Profile,
     pub seminar: SeminarPart,
     pub scaling: ScalingPart,
     pub specialise: SpecialisePart,
@@ -685,7 +726,7 @@ fn part_cpu(args: &Args) -> anyhow::Result<CpuPart> {
 fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
     let json = match part {
         "throughput" => serde_json::to_string(&part_throughput(args, true)?)?,
-        "throughput-bunny" => serde_json::to_string(&part_throughput(args, false)?)?,
+        "knob" => serde_json::to_string(&part_throughput(args, false)?)?,
         "seminar" => serde_json::to_string(&part_seminar(args)?)?,
         "scaling" => serde_json::to_string(&part_scaling(args)?)?,
         "specialise" => serde_json::to_string(&part_specialise(args)?)?,
@@ -693,19 +734,66 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
         _ => bail!("unknown part {part}"),
     };
     std::fs::write(out, json)?;
+    std::fs::write(out.with_extension("ticks"), own_ticks().to_string())?;
     Ok(())
+}
+
+/// This process's user + system CPU time in clock ticks (1/100 s).
+fn own_ticks() -> u64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // utime and stime: the 12th and 13th fields after the command name.
+    let rest = stat.rsplit_once(')').map_or("", |r| r.1);
+    let f: Vec<u64> = rest
+        .split_whitespace()
+        .map(|x| x.parse().unwrap_or(0))
+        .collect();
+    f.get(11).copied().unwrap_or(0) + f.get(12).copied().unwrap_or(0)
+}
+
+/// Busy CPU time of the whole machine in clock ticks (1/100 s).
+fn machine_busy_ticks() -> u64 {
+    let stat = std::fs::read_to_string("/proc/stat").unwrap_or_default();
+    let line = stat.lines().next().unwrap_or("");
+    // user nice system idle iowait irq softirq steal: all but idle, iowait.
+    line.split_whitespace()
+        .skip(1)
+        .take(8)
+        .enumerate()
+        .filter(|(i, _)| *i != 3 && *i != 4)
+        .map(|(_, x)| x.parse::<u64>().unwrap_or(0))
+        .sum()
 }
 
 /// Runs `part` in a child process with Mesa's shader cache disabled and
 /// `env` set.
 fn child<T: for<'de> Deserialize<'de>>(
     args: &Args,
+    parts: &mut Vec<PartInfo>,
     part: &str,
     env: &[(&str, &str)],
 ) -> anyhow::Result<T> {
+    child_with(args, parts, part, env, None)
+}
+
+/// [`child`], optionally run under `wrapper` (e.g. `perf record ...`).
+fn child_with<T: for<'de> Deserialize<'de>>(
+    args: &Args,
+    parts: &mut Vec<PartInfo>,
+    part: &str,
+    env: &[(&str, &str)],
+    wrapper: Option<&[String]>,
+) -> anyhow::Result<T> {
     let dir = tempfile::tempdir()?;
     let out = dir.path().join("part.json");
-    let mut cmd = Command::new(std::env::current_exe()?);
+    let exe = std::env::current_exe()?;
+    let mut cmd = match wrapper {
+        Some(w) => {
+            let mut c = Command::new(&w[0]);
+            c.args(&w[1..]).arg("--").arg(&exe);
+            c
+        }
+        None => Command::new(&exe),
+    };
     cmd.args(["--child", part, "--child-out"]).arg(&out);
     if args.quick {
         cmd.arg("--quick");
@@ -718,6 +806,7 @@ fn child<T: for<'de> Deserialize<'de>>(
         cmd.env(k, v);
     }
     let t0 = Instant::now();
+    let busy0 = machine_busy_ticks();
     eprintln!("bench: {part} {env:?}");
     let status = cmd
         .status()
@@ -725,7 +814,28 @@ fn child<T: for<'de> Deserialize<'de>>(
     if !status.success() {
         bail!("part {part} {env:?} failed: {status}");
     }
-    eprintln!("bench: {part} took {:.1} s", t0.elapsed().as_secs_f64());
+    let wall = t0.elapsed().as_secs_f64();
+    let busy = machine_busy_ticks().saturating_sub(busy0) as f64 / 100.0;
+    let own = std::fs::read_to_string(out.with_extension("ticks"))
+        .ok()
+        .and_then(|t| t.trim().parse::<u64>().ok())
+        .unwrap_or(0) as f64
+        / 100.0;
+    let info = PartInfo {
+        part: part.into(),
+        env: env
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+        wall_s: wall,
+        own_cores: own / wall,
+        other_cores: ((busy - own) / wall).max(0.0),
+    };
+    eprintln!(
+        "bench: {part} took {wall:.1} s (own {:.2} cores, others {:.2} cores)",
+        info.own_cores, info.other_cores
+    );
+    parts.push(info);
     let text = std::fs::read_to_string(&out)?;
     Ok(serde_json::from_str(&text)?)
 }
@@ -751,27 +861,19 @@ fn main() -> anyhow::Result<()> {
         quick: args.quick,
         ..Default::default()
     };
-    results.throughput = child(&args, "throughput", &[])?;
+    let mut parts = Vec::new();
+    let p = &mut parts;
+    results.throughput = child(&args, p, "throughput", &[])?;
+    results.seminar = child(&args, p, "seminar", &[])?;
+    results.cpu = child(&args, p, "cpu", &[])?;
+    results.specialise = child(&args, p, "specialise", &[])?;
+    results.scaling = child(&args, p, "scaling", &[])?;
     if !args.no_knobs {
-        let knobs: &[(&str, &str)] = &[
-            ("LP_NUM_THREADS", "1"),
-            ("LP_NUM_THREADS", "2"),
-            ("LP_NUM_THREADS", "4"),
-            ("LP_NATIVE_VECTOR_WIDTH", "128"),
-            ("LP_NATIVE_VECTOR_WIDTH", "256"),
-            ("LP_NATIVE_VECTOR_WIDTH", "512"),
-        ];
-        for &kv in knobs {
-            match child(&args, "throughput-bunny", &[kv]) {
-                Ok(p) => results.knobs.push(p),
-                Err(e) => eprintln!("bench: knob {kv:?} failed: {e:#}"),
-            }
-        }
+        results.knob_rounds = if args.quick { 1 } else { 3 };
+        results.knobs = knobs(&args, p, results.knob_rounds);
     }
-    results.seminar = child(&args, "seminar", &[])?;
-    results.scaling = child(&args, "scaling", &[])?;
-    results.specialise = child(&args, "specialise", &[])?;
-    results.cpu = child(&args, "cpu", &[])?;
+    results.profile = profile(&args, p);
+    results.parts = parts;
     results.wall_s = t0.elapsed().as_secs_f64();
 
     std::fs::create_dir_all(&args.out)?;
@@ -787,6 +889,150 @@ fn main() -> anyhow::Result<()> {
         results.wall_s
     );
     Ok(())
+}
+
+/// lavapipe's knobs: every setting in its own child process, in `rounds`
+/// rounds that each run every setting once (interleaved, so a period of
+/// contention hits all settings alike).
+fn knobs(args: &Args, parts: &mut Vec<PartInfo>, rounds: usize) -> Vec<Knob> {
+    let settings: &[&[(&str, &str)]] = &[
+        &[],
+        &[("LP_NUM_THREADS", "1")],
+        &[("LP_NUM_THREADS", "2")],
+        &[("LP_NUM_THREADS", "4")],
+        &[("LP_NATIVE_VECTOR_WIDTH", "128")],
+        &[("LP_NATIVE_VECTOR_WIDTH", "256")],
+        &[("LP_NATIVE_VECTOR_WIDTH", "512")],
+    ];
+    // runs[setting][round] = (device name, driver compile, frame times)
+    type Run = (String, f64, Vec<f64>);
+    let mut runs: Vec<Vec<Run>> = vec![Vec::new(); settings.len()];
+    for _ in 0..rounds {
+        for (i, env) in settings.iter().enumerate() {
+            match child::<ThroughputPart>(args, parts, "knob", env) {
+                Ok(p) => runs[i].push((
+                    p.device.name.clone(),
+                    p.scenes[0].driver_compile_ms,
+                    p.scenes[0].render_ms.samples.clone(),
+                )),
+                Err(e) => eprintln!("bench: knob {env:?} failed: {e:#}"),
+            }
+        }
+    }
+    let medians: Vec<Vec<f64>> = runs
+        .iter()
+        .map(|r| r.iter().map(|x| Stat::of(&x.2).median).collect())
+        .collect();
+    settings
+        .iter()
+        .zip(&runs)
+        .enumerate()
+        .filter(|(_, (_, r))| !r.is_empty())
+        .map(|(i, (env, r))| {
+            let speedups: Vec<f64> = medians[0]
+                .iter()
+                .zip(&medians[i])
+                .map(|(d, k)| d / k)
+                .collect();
+            Knob {
+                env: env
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect(),
+                device_name: r[0].0.clone(),
+                driver_compile_ms: r.iter().map(|x| x.1).collect(),
+                render_ms: Stat::of(&r.iter().flat_map(|x| x.2.clone()).collect::<Vec<_>>()),
+                speedup_vs_default: Stat::of(&speedups),
+            }
+        })
+        .collect()
+}
+
+/// Profiles a bunny run (compile and frames) with `perf record -e
+/// cpu-clock` when perf is available: which shared objects the time goes
+/// to (lavapipe's JIT-compiled kernel shows as `[JIT]`).
+fn profile(args: &Args, parts: &mut Vec<PartInfo>) -> Profile {
+    let skipped = |why: String| Profile {
+        skipped: Some(why),
+        ..Default::default()
+    };
+    if Command::new("perf").arg("--version").output().is_err() {
+        return skipped("perf is not installed".into());
+    }
+    let dir = match tempfile::tempdir() {
+        Ok(d) => d,
+        Err(e) => return skipped(e.to_string()),
+    };
+    let data = dir.path().join("perf.data");
+    let wrapper: Vec<String> = ["perf", "record", "-q", "-e", "cpu-clock", "-F", "999", "-o"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([data.display().to_string()])
+        .collect();
+    if let Err(e) = child_with::<ThroughputPart>(args, parts, "knob", &[], Some(&wrapper)) {
+        return skipped(format!("perf record failed: {e:#}"));
+    }
+    let report = |sort: &str| -> (u64, Vec<(String, f64)>) {
+        let out = Command::new("perf")
+            .args([
+                "report",
+                "--stdio",
+                "--no-children",
+                "-g",
+                "none",
+                "--sort",
+                sort,
+            ])
+            .arg("-i")
+            .arg(&data)
+            .output();
+        let Ok(out) = out else {
+            return (0, Vec::new());
+        };
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        // "# Samples: 3K of event 'cpu-clock'" is rounded; count from the
+        // "# Event count" line when there is one.
+        let samples = text
+            .lines()
+            .find(|l| l.starts_with("# Samples:"))
+            .and_then(|l| l.split_whitespace().nth(2))
+            .map_or(0, |n| {
+                let (num, k) = n.strip_suffix('K').map_or((n, 1.0), |x| (x, 1000.0));
+                (num.parse::<f64>().unwrap_or(0.0) * k) as u64
+            });
+        let rows = text
+            .lines()
+            .filter(|l| !l.starts_with('#') && l.contains('%'))
+            .filter_map(|l| {
+                let (pct, name) = l.trim().split_once('%')?;
+                Some((name.trim().to_string(), pct.trim().parse().ok()?))
+            })
+            .collect();
+        (samples, rows)
+    };
+    let (samples, mut dsos) = report("dso");
+    // One `[JIT] tid N` entry per thread: merge them.
+    let jit: f64 = dsos
+        .iter()
+        .filter(|d| d.0.starts_with("[JIT]"))
+        .map(|d| d.1)
+        .sum();
+    dsos.retain(|d| !d.0.starts_with("[JIT]"));
+    dsos.push(("[JIT] (lavapipe's compiled kernel)".into(), jit));
+    dsos.sort_by(|a, b| b.1.total_cmp(&a.1));
+    dsos.truncate(6);
+    let mut symbols: Vec<(String, f64)> = report("dso,sym")
+        .1
+        .into_iter()
+        .filter(|s| !s.0.starts_with("[JIT]"))
+        .collect();
+    symbols.truncate(8);
+    Profile {
+        skipped: None,
+        samples,
+        dsos,
+        symbols,
+    }
 }
 
 /// The report's "what stands in the way" section, from this run's figures.

@@ -148,7 +148,7 @@ fn plot(rows: &[Row]) -> anyhow::Result<()> {
         let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
         root.fill(&WHITE)?;
         let (left, right) = root.split_horizontally(600);
-        let err_range = (1e-4f64)..1.0f64;
+        let err_range = 1e-4f64..1.0f64;
         for (area, by_time) in [(left, false), (right, true)] {
             let x_range = if by_time {
                 let max = rows.iter().map(|r| r.1 .1.max(r.2 .1)).fold(0.0, f64::max);

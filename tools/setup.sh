@@ -5,7 +5,8 @@
 # our ray-tracing kernel 1.75x faster than bookworm's Mesa 22.3).
 #
 #   tools/setup.sh              loader + lavapipe, only if no Vulkan driver is present
-#   tools/setup.sh --ci         also the Khronos validation layer (used by .ci/run)
+#   tools/setup.sh --tests      also what the test suite needs: the Khronos validation
+#                               layer and Chromium (hot-reload page test); --ci is the same
 #                               and Chromium (the `penumbra watch --serve` page test,
 #                               tests/watch_browser.rs, drives it headless)
 #
@@ -16,8 +17,8 @@ set -euo pipefail
 want_layers=0
 for arg in "$@"; do
   case "$arg" in
-    --ci) want_layers=1 ;;
-    *) echo "setup.sh: unknown argument '$arg' (expected --ci)" >&2; exit 2 ;;
+    --tests|--ci) want_layers=1 ;;
+    *) echo "setup.sh: unknown argument '$arg' (expected --tests)" >&2; exit 2 ;;
   esac
 done
 

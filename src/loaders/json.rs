@@ -498,13 +498,7 @@ impl Reader<'_> {
                 let corner = self.finite(&f("corner"), l.corner.unwrap_or_default())?;
                 let edge1 = self.finite(&f("edge1"), l.edge1.unwrap_or_default())?;
                 let edge2 = self.finite(&f("edge2"), l.edge2.unwrap_or_default())?;
-                let scale = edge1.length_squared().max(edge2.length_squared());
-                if !(edge1.cross(edge2).length() > 1e-12 * scale) {
-                    return Err(self.err(
-                        f("edge2"),
-                        "the rectangle has zero area (an edge is zero or the edges are parallel)",
-                    ));
-                }
+                // Zero area is checked with the scene (Scene::validate).
                 LightKind::Rect {
                     corner,
                     edge1,

@@ -28,6 +28,7 @@ pub const SHADER_FILES: &[&str] = &[
     "shadows.wgsl",
     "bvh.wgsl",
     "sampling.wgsl",
+    "queries.wgsl",
 ];
 
 /// The files built into the binary, so an installed `penumbra` needs no
@@ -48,10 +49,13 @@ const EMBEDDED: &[&str] = &[
     include_str!("../../shaders/shadows.wgsl"),
     include_str!("../../shaders/bvh.wgsl"),
     include_str!("../../shaders/sampling.wgsl"),
+    include_str!("../../shaders/queries.wgsl"),
 ];
 
 /// The compute kernel's entry point.
 pub const ENTRY_POINT: &str = "render";
+/// The ray-query kernel's entry point (`shaders/queries.wgsl`).
+pub const TRACE_ENTRY_POINT: &str = "trace";
 
 /// Where the WGSL comes from.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -166,6 +170,16 @@ impl Assembled {
         features: &Features,
         kernel: &KernelOptions,
     ) -> Result<Vec<u32>, CompileError> {
+        self.compile_entry(features, kernel, ENTRY_POINT)
+    }
+
+    /// Compiles entry point `entry` (the render kernel or the ray queries).
+    pub fn compile_entry(
+        &self,
+        features: &Features,
+        kernel: &KernelOptions,
+        entry: &str,
+    ) -> Result<Vec<u32>, CompileError> {
         use naga::valid::{Capabilities, ValidationFlags, Validator};
         let module = self.parse()?;
         let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
@@ -191,7 +205,7 @@ impl Assembled {
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             &module,
             &info,
-            Some((naga::ShaderStage::Compute, ENTRY_POINT)),
+            Some((naga::ShaderStage::Compute, entry)),
             &constants,
         )
         .map_err(|e| CompileError {
@@ -201,7 +215,7 @@ impl Assembled {
         let options = spirv_options();
         let pipeline = naga::back::spv::PipelineOptions {
             shader_stage: naga::ShaderStage::Compute,
-            entry_point: ENTRY_POINT.to_string(),
+            entry_point: entry.to_string(),
         };
         naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).map_err(|e| {
             CompileError {
@@ -222,14 +236,19 @@ pub enum Accel {
     BruteForce,
 }
 
-/// The ray/triangle test's order of work (the seminar's comparison).
+/// The ray/triangle test.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TriangleTest {
-    /// Möller–Trumbore computing u, then v, then t, rejecting early (default).
-    #[default]
+    /// Möller–Trumbore in the seminar's order: u, then v, then t, rejecting
+    /// early. Not watertight: rays can slip through shared edges.
     UvFirst = 0,
-    /// The same test computing t first.
+    /// Möller–Trumbore computing t first (the seminar's slower baseline).
     TFirst = 1,
+    /// Woop, Benthin and Wald's watertight test (JCGT 2013), also in the
+    /// seminar's order: edge functions (barycentrics) first, t last. The
+    /// default: no ray slips between triangles that share an edge.
+    #[default]
+    Watertight = 2,
 }
 
 /// Where shadow rays start.
@@ -326,7 +345,10 @@ impl std::str::FromStr for TriangleTest {
         match s {
             "uv-first" => Ok(TriangleTest::UvFirst),
             "t-first" => Ok(TriangleTest::TFirst),
-            _ => Err(format!("expected `uv-first` or `t-first`, got `{s}`")),
+            "watertight" => Ok(TriangleTest::Watertight),
+            _ => Err(format!(
+                "expected `watertight`, `uv-first` or `t-first`, got `{s}`"
+            )),
         }
     }
 }
@@ -396,7 +418,11 @@ mod tests {
             pixel_jitter: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
-            for triangle_test in [TriangleTest::UvFirst, TriangleTest::TFirst] {
+            for triangle_test in [
+                TriangleTest::UvFirst,
+                TriangleTest::TFirst,
+                TriangleTest::Watertight,
+            ] {
                 let kernel = KernelOptions {
                     accel,
                     triangle_test,

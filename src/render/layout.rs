@@ -87,9 +87,9 @@ pub struct Sphere {
 pub struct Triangle {
     pub v0: [f32; 3],
     pub shader: u32,
-    pub e1: [f32; 3],
+    pub v1: [f32; 3],
     pub object: u32,
-    pub e2: [f32; 3],
+    pub v2: [f32; 3],
     pub normals: u32,
 }
 
@@ -150,6 +150,30 @@ pub struct BvhNode {
     pub index: u32,
     pub max: [f32; 3],
     pub count: u32,
+}
+
+/// Mirrors `QueryRay` in `shaders/queries.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct QueryRay {
+    pub origin: [f32; 3],
+    pub _pad0: u32,
+    pub dir: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// Mirrors `QueryHit` in `shaders/queries.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct QueryHit {
+    pub t: f32,
+    pub kind: u32,
+    pub index: u32,
+    pub u: f32,
+    pub v: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// `bvh_prims` entries with this bit set are spheres, else triangles.
@@ -230,13 +254,14 @@ impl GpuScene {
                     }
                     None => NO_NORMALS,
                 };
-                // Edges in f64 from exact camera-relative vertices.
+                // Camera-relative in f64, then rounded: a vertex shared by
+                // several triangles gets the same bits in each (watertight).
                 g.triangles.push(Triangle {
                     v0: f3(v[0] - eye),
                     shader,
-                    e1: f3(v[1] - v[0]),
+                    v1: f3(v[1] - eye),
                     object,
-                    e2: f3(v[2] - v[0]),
+                    v2: f3(v[2] - eye),
                     normals,
                 });
             };
@@ -379,10 +404,7 @@ impl GpuScene {
         let mut boxes: Vec<Aabb> = self
             .triangles
             .iter()
-            .map(|t| {
-                let v0 = v(t.v0);
-                Aabb::of_points(&[v0, v0 + v(t.e1), v0 + v(t.e2)])
-            })
+            .map(|t| Aabb::of_points(&[v(t.v0), v(t.v1), v(t.v2)]))
             .collect();
         boxes.extend(self.spheres.iter().map(|s| {
             let r = DVec3::splat(s.radius as f64);
@@ -490,6 +512,12 @@ mod tests {
                 ]
             ),
             layout!("BvhNode", BvhNode, [min, index, max, count]),
+            layout!("QueryRay", QueryRay, [origin, _pad0, dir, _pad1]),
+            layout!(
+                "QueryHit",
+                QueryHit,
+                [t, kind, index, u, v, _pad0, _pad1, _pad2]
+            ),
             layout!(
                 "PushConstants",
                 PushConstants,
@@ -497,7 +525,7 @@ mod tests {
             ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
-            layout!("Triangle", Triangle, [v0, shader, e1, object, e2, normals]),
+            layout!("Triangle", Triangle, [v0, shader, v1, object, v2, normals]),
             layout!("VertexNormals", VertexNormals, [n0, n1, n2]),
             layout!(
                 "Light",

@@ -5,6 +5,7 @@
 pub mod compile;
 pub mod layout;
 mod reload;
+mod trace;
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -20,12 +21,13 @@ pub use compile::{
     Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
 };
 use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
+pub use trace::{HitKind, TraceHit, TraceRay};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
 const TILE: u32 = 8;
 
 /// Binding types of set 0, in binding order (see `shaders/`).
-const BINDINGS: [BindingType; 11] = [
+const BINDINGS: [BindingType; 13] = [
     BindingType::Uniform,          // 0 globals
     BindingType::StorageReadOnly,  // 1 planes
     BindingType::StorageReadOnly,  // 2 spheres
@@ -37,6 +39,8 @@ const BINDINGS: [BindingType; 11] = [
     BindingType::StorageReadWrite, // 8 counters
     BindingType::StorageReadOnly,  // 9 BVH nodes
     BindingType::StorageReadOnly,  // 10 BVH primitive references
+    BindingType::StorageReadOnly,  // 11 query rays (ray queries only)
+    BindingType::StorageReadWrite, // 12 query hits (ray queries only)
 ];
 
 /// How to set up a [`Renderer`].
@@ -204,6 +208,8 @@ pub struct UploadedScene {
     buffers: Vec<Buffer>,
     features: Features,
     kernel: KernelOptions,
+    /// The camera position the geometry is relative to.
+    eye: glam::DVec3,
     width: u32,
     height: u32,
     accel_build: Duration,
@@ -235,6 +241,7 @@ impl UploadedScene {
 pub struct Renderer {
     // Field order matters: pipelines must drop before the context.
     pipelines: HashMap<(Features, KernelOptions), ComputePipeline>,
+    trace_pipelines: HashMap<(Features, KernelOptions), ComputePipeline>,
     shaders: ShaderSource,
     kernel: KernelOptions,
     context: Context,
@@ -249,6 +256,7 @@ impl Renderer {
         })?;
         Ok(Renderer {
             pipelines: HashMap::new(),
+            trace_pipelines: HashMap::new(),
             shaders: opts.shaders.clone(),
             kernel: opts.kernel,
             context,
@@ -274,6 +282,7 @@ impl Renderer {
     /// Forgets compiled kernels (after a shader edit).
     pub fn clear_pipeline_cache(&mut self) {
         self.pipelines.clear();
+        self.trace_pipelines.clear();
     }
 
     /// Compiles the kernel for `features` unless cached; returns the time of
@@ -396,11 +405,15 @@ impl Renderer {
             ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
             storage("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
             storage("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
+            // Ray-query buffers: placeholders, replaced per Renderer::trace.
+            ctx.create_buffer("query rays", BufferUsage::Storage, 16)?,
+            ctx.create_buffer("query hits", BufferUsage::Storage, 16)?,
         ];
         Ok(UploadedScene {
             buffers,
             features: scene.features(),
             kernel: self.kernel,
+            eye: scene.camera.position,
             width,
             height,
             accel_build,

@@ -286,7 +286,8 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                 finite3(&f("edge1"), edge1)?;
                 finite3(&f("edge2"), edge2)?;
                 let area = edge1.cross(edge2).length();
-                if !(area > 1e-12 * edge1.length_squared().max(edge2.length_squared())) {
+                let spans_area = area > 1e-12 * edge1.length_squared().max(edge2.length_squared());
+                if !spans_area {
                     return Err(Invalid::new(
                         f("edge2"),
                         "the rectangle has zero area (an edge is zero or the edges are parallel)",

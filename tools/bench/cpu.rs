@@ -266,7 +266,9 @@ impl CpuScene {
             hit.shader = plane.shader;
         } else {
             let tri = &self.triangles[hit.index as usize];
-            ng = v3(tri.e1).cross(v3(tri.e2)).normalize();
+            ng = (v3(tri.v1) - v3(tri.v0))
+                .cross(v3(tri.v2) - v3(tri.v0))
+                .normalize();
             ns = self.shading_normal(tri, ng, hit.u, hit.v);
             hit.shader = tri.shader;
         }
@@ -501,7 +503,7 @@ fn box_entry(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
 /// The seminar's u,v-first Möller–Trumbore: (t, u, v), t = -1 for a miss.
 fn intersect_triangle(tri: &Triangle, ray: Ray, t_max: f32) -> [f32; 3] {
     const MISS: [f32; 3] = [-1.0, 0.0, 0.0];
-    let (e1, e2) = (v3(tri.e1), v3(tri.e2));
+    let (e1, e2) = (v3(tri.v1) - v3(tri.v0), v3(tri.v2) - v3(tri.v0));
     let p = ray.dir.cross(e2);
     let det = e1.dot(p);
     if det == 0.0 {

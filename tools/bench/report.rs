@@ -460,35 +460,32 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(o, "## 5. Lavapipe's knobs\n");
     let _ = writeln!(
         o,
-        "Mesa reads these when the driver loads, so each row is a separate process (this program re-invoked) rendering the bunny at 1024×1024 ({} frames). The first row is the default environment of section 1.\n",
-        bunny.render_ms.samples.len()
+        "Mesa reads these when the driver loads, so every setting runs in its own process (this program re-invoked: the bunny at 1024×1024, a warm-up frame, then {} frames). The settings are interleaved: {} rounds, each running every setting once, so a period when another process takes a core hits all settings alike; the speed-up is the median over rounds of (default's median / setting's median) within the round.\n",
+        bunny.render_ms.samples.len().min(5),
+        r.knob_rounds
     );
     let _ = writeln!(
         o,
-        "| Environment | Device name | Driver compile (cold) | Render ms/frame, median [min–max] | Mrays/s | vs default |\n|---|---|---|---|---|---|"
+        "| Environment | Device name | Driver compile (cold), per round | Render ms/frame, median [min–max] of all frames | Speed-up vs default, median [min–max] over rounds |\n|---|---|---|---|---|"
     );
-    let base = bunny.render_ms.median;
-    let mut knob_rows = vec![("(default)".to_string(), d.name.clone(), bunny)];
     for k in &r.knobs {
-        let env = k
-            .env
-            .iter()
-            .filter(|(n, _)| n != "MESA_SHADER_CACHE_DISABLE")
-            .map(|(n, v)| format!("`{n}={v}`"))
-            .collect::<Vec<_>>()
-            .join(" ");
-        knob_rows.push((env, k.device.name.clone(), &k.scenes[0]));
-    }
-    for (env, name, t) in knob_rows {
+        let env = if k.env.is_empty() {
+            "(default)".to_string()
+        } else {
+            k.env
+                .iter()
+                .map(|(n, v)| format!("`{n}={v}`"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
         let _ = writeln!(
             o,
-            "| {} | {} | {:.0} ms | {} | {} | {:.2}× |",
+            "| {} | {} | {} ms | {} | {} |",
             env,
-            name,
-            t.driver_compile_ms,
-            st(&t.render_ms),
-            mrays(t),
-            base / t.render_ms.median
+            k.device_name,
+            list0(&k.driver_compile_ms),
+            st(&k.render_ms),
+            ratio(&k.speedup_vs_default)
         );
     }
     let _ = writeln!(o);
@@ -500,6 +497,7 @@ pub fn markdown(r: &Results) -> String {
         "The peers, as given in the issue (measured on this kind of 2-core machine, same scene, 2 threads, medians), against penumbra's render phase on lavapipe from section 1, and against a plain multi-threaded Rust CPU implementation of penumbra's own algorithm measured in this run (`tools/bench/cpu.rs`: the same camera-relative `f32` data and BVH, the same primary rays, nearest-first traversal with the same slab test, u,v-first Möller–Trumbore, Phong shading, the same shadow rays with the same self-skip and Wächter–Binder offset; rows in parallel with rayon on {} threads).\n",
         cpu.threads
     );
+    let base = bunny.render_ms.median;
     let rays = (bunny.primary_rays + bunny.shadow_rays) as f64;
     let _ = writeln!(
         o,
@@ -571,9 +569,66 @@ pub fn markdown(r: &Results) -> String {
         base / 38.7,
         base - 38.7
     );
+    let _ = writeln!(o, "### Where the time goes\n");
+    let p = &r.profile;
+    match &p.skipped {
+        Some(why) => {
+            let _ = writeln!(o, "No profile: {why}.\n");
+        }
+        None => {
+            let _ = writeln!(
+                o,
+                "`perf record -e cpu-clock` (software clock sampling; this virtual machine has no hardware counters) of one default bunny process — cold compile plus {} frames — about {} samples:\n",
+                bunny.render_ms.samples.len().min(5) + 2,
+                int(p.samples)
+            );
+            let _ = writeln!(o, "| Shared object | Samples |\n|---|---|");
+            for (name, pct) in &p.dsos {
+                let _ = writeln!(o, "| {name} | {pct:.1}% |");
+            }
+            let _ = writeln!(
+                o,
+                "\n| Hottest symbols outside the kernel | Samples |\n|---|---|"
+            );
+            for (name, pct) in &p.symbols {
+                let _ = writeln!(o, "| `{}` | {pct:.1}% |", name.replace('|', "\\|"));
+            }
+            let _ = writeln!(o);
+        }
+    }
     let _ = writeln!(o, "### What stands in the way\n");
     o.push_str(&crate::analysis(r));
+
+    let _ = writeln!(o, "\n## Machine load during the run\n");
+    let _ = writeln!(
+        o,
+        "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. For every measuring process: its own CPU use and everyone else's, averaged over its run (from /proc/stat), in cores. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
+    );
+    let _ = writeln!(
+        o,
+        "| Part | Environment | Wall | Own cores | Other cores |\n|---|---|---|---|---|"
+    );
+    for p in &r.parts {
+        let env = p
+            .env
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let _ = writeln!(
+            o,
+            "| {} | {} | {:.1} s | {:.2} | {:.2} |",
+            p.part, env, p.wall_s, p.own_cores, p.other_cores
+        );
+    }
     o
+}
+
+fn list0(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x:.0}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn min(v: &[f64]) -> f64 {
