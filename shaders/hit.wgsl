@@ -20,6 +20,8 @@ struct Hit {
     geometric_normal: vec3<f32>,
     shading_normal: vec3<f32>,
     shader: u32,
+    // Index of the scene object the primitive belongs to.
+    object: u32,
 }
 
 // Nearest hit over every primitive kind the scene has: planes one by one
@@ -96,18 +98,21 @@ fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
             ng = plane.normal;
             ns = ng;
             (*hit).shader = plane.shader;
+            (*hit).object = plane.object;
         }
         case KIND_SPHERE: {
             let sphere = spheres[(*hit).index];
             ng = normalize(p - sphere.center);
             ns = ng;
             (*hit).shader = sphere.shader;
+            (*hit).object = sphere.object;
         }
         default: {
             let tri = triangles[(*hit).index];
             ng = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
             ns = triangle_shading_normal(tri, ng, (*hit).u, (*hit).v);
             (*hit).shader = tri.shader;
+            (*hit).object = tri.object;
         }
     }
     if dot(ng, ray.dir) > 0.0 {

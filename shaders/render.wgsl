@@ -30,6 +30,8 @@ override SHADOW_EPSILON: f32 = 0.0;
 override SAMPLER: u32 = 0u;
 override HAS_AREA_LIGHTS: bool = true;
 override PIXEL_JITTER: bool = true;
+// Arbitrary output variables (depth, normal, uv, ids) requested.
+override HAS_AOV: bool = true;
 
 // Mirrored by render::layout::Globals.
 struct Globals {
@@ -98,6 +100,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
         if hit.found {
             colour = shade(ray, hit, pixel, &shadow_rays);
             alpha = 1.0;
+        }
+        if HAS_AOV && push.pass_index == 0u {
+            write_aov(pixel, hit);
         }
         var value = vec4<f32>(colour, alpha);
         if push.pass_index > 0u {

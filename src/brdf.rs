@@ -35,6 +35,13 @@
 //! convention, in which `k_d` is the albedo) divides the whole BRDF by `π`.
 //! [`Units`] selects one of the two; the `1/cos θ_i` is there in both.
 //!
+//! Consequences, found by the lab: the seminar's form is not reciprocal for
+//! any parameters, and does not conserve energy. In renderer units even its
+//! albedo is too large (`a(0) = π·k_d + k_s·2π/(n+1)`); divided by `π` the
+//! albedo `a(ω_o)` stays `≤ k_d + k_s·2/(n+1) ≤ 1`, but the reflectance
+//! `R(ω_i)` (below) grows like `1/cos θ_i` towards grazing incidence, past 1
+//! for every `k_s > 0` and `n`.
+//!
 //! # The models
 //!
 //! | [`Model`] | `f(ω_i, ω_o)` |
@@ -434,10 +441,11 @@ fn estimate(q: &Quadrature, f: impl Fn(&Quadrature) -> f64) -> Estimate {
 }
 
 /// The polar angles (degrees) at which `a` and `R` are evaluated: every 5°
-/// from 0 to 85, then closer to grazing.
-pub const ENERGY_ANGLES_DEG: [f64; 22] = [
+/// from 0 to 85, then closer and closer to grazing (the seminar's `1/cos θ_i`
+/// shows there, the sooner the broader the lobe).
+pub const ENERGY_ANGLES_DEG: [f64; 24] = [
     0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0, 65.0, 70.0, 75.0,
-    80.0, 85.0, 88.0, 89.0, 89.5, 89.9,
+    80.0, 85.0, 88.0, 89.0, 89.5, 89.9, 89.99, 89.999,
 ];
 
 /// A grid of directions for the pointwise checks: polar angles at the

@@ -140,6 +140,15 @@ struct RenderArgs {
     /// Sample placement: `stratified` (low-discrepancy) or `random`.
     #[arg(long, default_value = "stratified")]
     sampler: Sampler,
+    /// Render with the f64 CPU reference instead of Vulkan (the ground truth
+    /// for error figures; same image semantics and sample pattern, rows in
+    /// parallel; --accel and --triangle-test do not apply).
+    #[arg(long, conflicts_with_all = ["device", "shaders", "validate"])]
+    reference: bool,
+    /// Also write arbitrary output variables as channels of the .exr output:
+    /// any of depth, normal, uv, id (comma-separated).
+    #[arg(long, conflicts_with = "reference")]
+    aov: Option<output::AovSet>,
 }
 
 fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
@@ -172,9 +181,17 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed,
         time_budget,
         sampler,
+        reference,
+        aov,
     } = args;
     // Refuse an unwritable output before spending time on the render.
-    output::check_writable(&out)?;
+    let format = output::check_writable(&out)?;
+    if aov.is_some() && format != output::Format::Exr {
+        anyhow::bail!(
+            "{}: --aov needs an .exr output (-o NAME.exr)",
+            out.display()
+        );
+    }
     let t0 = Instant::now();
     let loaded = loaders::load_scene(&scene, &LoadOptions { width, height })?;
     let load = t0.elapsed();
@@ -194,6 +211,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         sampler,
         ..Default::default()
     };
+    if reference {
+        let sampling = Sampling {
+            spp,
+            seed,
+            time_budget,
+        };
+        return render_reference(&scene_data, &sampling, &kernel, &out, load);
+    }
     let mut renderer = Renderer::new(&RendererOptions {
         device,
         validation: validate,
@@ -205,8 +230,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed,
         time_budget,
     };
-    let frame =
-        render_with_progress(&mut renderer, &scene_data, &sampling).map_err(|e| match e {
+    let (frame, aovs) = render_with_progress(&mut renderer, &scene_data, &sampling, aov.is_some())
+        .map_err(|e| match e {
             // Device limits name a scene field: say which file.
             RenderError::Scene { field, message } => {
                 let field = match (field.as_str(), width.is_some(), height.is_some()) {
@@ -221,7 +246,10 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             e => e.into(),
         })?;
     let t1 = Instant::now();
-    output::write_image(&out, &frame.image)?;
+    match (aov, &aovs) {
+        (Some(set), Some(a)) => output::write_exr_with_aovs(&out, &frame.image, a, set)?,
+        _ => output::write_image(&out, &frame.image)?,
+    }
     let write = t1.elapsed();
     let s = &frame.stats;
     let t = &s.timings;
@@ -250,13 +278,45 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `penumbra render --reference`: the f64 CPU renderer, no Vulkan; the
+/// summary line in the style of the GPU path's.
+fn render_reference(
+    scene: &penumbra::scene::Scene,
+    sampling: &Sampling,
+    kernel: &KernelOptions,
+    out: &std::path::Path,
+    load: std::time::Duration,
+) -> anyhow::Result<()> {
+    let frame = penumbra::reference::render(scene, sampling, kernel);
+    let t1 = Instant::now();
+    output::write_image(out, &frame.image)?;
+    let write = t1.elapsed();
+    let s = &frame.stats;
+    println!(
+        "CPU reference (f64): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, BVH build {}, render {}, write {} | {:.1} Mrays/s",
+        frame.image.width,
+        frame.image.height,
+        s.passes,
+        s.rays(),
+        s.primary_rays,
+        s.shadow_rays,
+        ms(load),
+        ms(s.timings.accel_build),
+        ms(s.timings.render),
+        ms(write),
+        s.mrays_per_second()
+    );
+    Ok(())
+}
+
 /// Uploads and renders in passes, with a progress bar (passes and rays/s)
 /// when there is more than one pass and stderr is a terminal.
 fn render_with_progress(
     renderer: &mut Renderer,
     scene: &penumbra::scene::Scene,
     sampling: &Sampling,
-) -> Result<penumbra::render::Frame, RenderError> {
+    with_aovs: bool,
+) -> Result<(penumbra::render::Frame, Option<penumbra::render::Aovs>), RenderError> {
     let uploaded = renderer.upload(scene)?;
     let bar = if sampling.spp > 1 {
         indicatif::ProgressBar::new(sampling.spp as u64)
@@ -268,17 +328,26 @@ fn render_with_progress(
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let (w, h) = uploaded.size();
-    let frame = renderer.render_progressive(&uploaded, w, h, sampling, &mut |p| {
+    let mut on_pass = |p: &penumbra::render::PassInfo| {
         bar.set_position(p.done as u64);
         let rate = p.rays as f64 / p.elapsed.as_secs_f64().max(1e-9) / 1e6;
         bar.set_message(format!("{rate:.1} Mrays/s"));
-    });
+    };
+    let result = if with_aovs {
+        renderer
+            .render_with_aovs(&uploaded, w, h, sampling, &mut on_pass)
+            .map(|(f, a)| (f, Some(a)))
+    } else {
+        renderer
+            .render_progressive(&uploaded, w, h, sampling, &mut on_pass)
+            .map(|f| (f, None))
+    };
     bar.finish_and_clear();
-    let mut frame = frame?;
+    let (mut frame, aovs) = result?;
     let (accel_build, upload) = uploaded.upload_timings();
     frame.stats.timings.accel_build = accel_build;
     frame.stats.timings.upload = upload;
-    Ok(frame)
+    Ok((frame, aovs))
 }
 
 fn devices() -> anyhow::Result<()> {

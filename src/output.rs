@@ -147,12 +147,25 @@ pub fn write_image(path: &Path, image: &Image) -> Result<(), OutputError> {
         path: path.display().to_string(),
         error,
     })?;
+    persist(path, &bytes)
+}
+
+/// Writes `bytes` to a temporary file beside `path` and renames it into
+/// place. The file gets the usual permissions (0666 less the umask), not the
+/// private 0600 of a temporary file.
+fn persist(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let io = |error| OutputError::Io {
         path: path.display().to_string(),
         error,
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(parent_dir(path)).map_err(io)?;
-    tmp.write_all(&bytes).map_err(io)?;
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(parent_dir(path)).map_err(io)?;
+    tmp.write_all(bytes).map_err(io)?;
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())
@@ -174,4 +187,104 @@ mod tests {
         assert_eq!(srgb8(0.18), 118); // 0.4614 * 255
         assert_eq!(srgb8(0.002), 7); // linear segment: 12.92 * 0.002 * 255 = 6.6
     }
+}
+
+/// Which arbitrary output variables to write (`--aov depth,normal,uv,id`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AovSet {
+    /// Channel `Z`: distance along the primary ray (+inf on misses).
+    pub depth: bool,
+    /// Channels `N.X`, `N.Y`, `N.Z`: unit geometric normal facing the viewer.
+    pub normal: bool,
+    /// Channels `uv.U`, `uv.V`: barycentric coordinates of triangle hits.
+    pub uv: bool,
+    /// Channels `id.object`, `id.primitive` (32-bit unsigned; 4294967295 on
+    /// misses).
+    pub id: bool,
+}
+
+impl std::str::FromStr for AovSet {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut set = AovSet::default();
+        for name in s.split(',').map(str::trim) {
+            match name {
+                "depth" => set.depth = true,
+                "normal" => set.normal = true,
+                "uv" => set.uv = true,
+                "id" => set.id = true,
+                _ => {
+                    return Err(format!(
+                        "unknown AOV `{name}`: expected depth, normal, uv or id"
+                    ))
+                }
+            }
+        }
+        Ok(set)
+    }
+}
+
+/// Writes linear RGB plus the chosen AOV channels into one OpenEXR file,
+/// atomically.
+pub fn write_exr_with_aovs(
+    path: &Path,
+    image: &Image,
+    aovs: &crate::render::Aovs,
+    set: AovSet,
+) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    let name = path.display().to_string();
+    if Format::from_path(path)? != Format::Exr {
+        return Err(OutputError::UnknownFormat(format!(
+            "{name} (AOVs need an .exr output)"
+        )));
+    }
+    let size = (image.width as usize, image.height as usize);
+    let f32s = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
+    let mut channels: Vec<AnyChannel<FlatSamples>> = (0..3)
+        .map(|c| {
+            f32s(
+                ["R", "G", "B"][c],
+                image.pixels.iter().map(|p| p[c]).collect(),
+            )
+        })
+        .collect();
+    if set.depth {
+        channels.push(f32s("Z", aovs.depth.clone()));
+    }
+    if set.normal {
+        for (c, n) in ["N.X", "N.Y", "N.Z"].iter().enumerate() {
+            channels.push(f32s(n, aovs.normal.iter().map(|v| v[c]).collect()));
+        }
+    }
+    if set.uv {
+        for (c, n) in ["uv.U", "uv.V"].iter().enumerate() {
+            channels.push(f32s(n, aovs.uv.iter().map(|v| v[c]).collect()));
+        }
+    }
+    if set.id {
+        channels.push(AnyChannel::new(
+            "id.object",
+            FlatSamples::U32(aovs.object.clone()),
+        ));
+        channels.push(AnyChannel::new(
+            "id.primitive",
+            FlatSamples::U32(aovs.primitive.clone()),
+        ));
+    }
+    let layer = Layer::new(
+        size,
+        LayerAttributes::named("penumbra"),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    let mut bytes = Vec::new();
+    exr::image::Image::from_layer(layer)
+        .write()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .map_err(|e| OutputError::Io {
+            path: name.clone(),
+            error: std::io::Error::other(e.to_string()),
+        })?;
+    persist(path, &bytes)
 }

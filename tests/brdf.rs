@@ -102,23 +102,28 @@ fn seminar_phong_does_not_conserve_energy() {
     // The diffuse part alone, k_d = 0.5: albedo π·k_d = 1.571.
     let a = albedo(&seminar_phong(Units::Renderer, 0.5, 0.0, 1.0), 0.0);
     assert!((a.value - PI / 2.0).abs() < 1e-9, "a = {a:?}");
-    // Even divided by π, with k_d + k_s ≤ 1, the 1/cos θ_i makes the power
-    // reflected from light arriving near grazing incidence exceed the power
-    // arriving: R(89°) > 1 for every shininess.
+    // Divided by π, the albedo a(ω_o) stays ≤ 1 (a(0) = k_s·2/(n+1)), but the
+    // 1/cos θ_i makes the power reflected from light arriving near grazing
+    // incidence exceed the power arriving: R(89.999°) > 1 for every shininess,
+    // and R grows like 1/cos θ_i towards the horizon.
     for n in SHININESS {
         let b = seminar_phong(Units::PerPi, 0.0, 1.0, n);
-        let r = reflectance(&b, 89f64.to_radians());
-        assert!(r.value - r.error > 1.0, "n = {n}: R(89°) = {r:?}");
-        // … and it grows without bound towards the horizon.
-        let r2 = reflectance(&b, 89.9f64.to_radians());
-        assert!(r2.value > 5.0 * r.value, "n = {n}: {r:?} then {r2:?}");
+        let a = albedo(&b, 0.0);
+        assert!(
+            (a.value - 2.0 / (n + 1.0)).abs() < 1e-9 + a.error,
+            "n = {n}: {a:?}"
+        );
+        let r1 = reflectance(&b, 89.99f64.to_radians());
+        let r2 = reflectance(&b, 89.999f64.to_radians());
+        assert!(r2.value - r2.error > 1.0, "n = {n}: R(89.999°) = {r2:?}");
+        assert!(r2.value > 5.0 * r1.value, "n = {n}: {r1:?} then {r2:?}");
     }
-    // k_d = 0.5, k_s = 0.5, n = 20: R(85°) already exceeds 1.
+    // With a diffuse part, k_d = k_s = 0.5, n = 20: R(89.99°) > 1.
     let r = reflectance(
         &seminar_phong(Units::PerPi, 0.5, 0.5, 20.0),
-        85f64.to_radians(),
+        89.99f64.to_radians(),
     );
-    assert!(r.value - r.error > 1.0, "R(85°) = {r:?}");
+    assert!(r.value - r.error > 1.0, "R(89.99°) = {r:?}");
 }
 
 /// The textbook lobe `k_s·cos^n α` is reciprocal but, unnormalised, reflects

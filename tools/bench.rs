@@ -161,6 +161,8 @@ pub struct SeminarPart {
     pub uv_vs_t_brute: Pair,
     pub uv_vs_t_bvh: Pair,
     pub bvh_vs_brute: Pair,
+    /// The default (watertight) test against the seminar's, with the BVH.
+    pub watertight_vs_uv_bvh: Pair,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
@@ -283,6 +285,8 @@ pub struct Results {
     pub date: String,
     pub commit: String,
     pub command: String,
+    /// The renderer's default triangle test (throughput, scaling, knobs).
+    pub default_triangle_test: String,
     pub quick: bool,
     pub wall_s: f64,
     pub parts: Vec<PartInfo>,
@@ -536,10 +540,23 @@ fn part_seminar(args: &Args) -> anyhow::Result<SeminarPart> {
         small,
         brute_reps,
     )?;
+    let watertight_vs_uv_bvh = interleave(
+        &mut r,
+        "BVH, watertight (the default) vs u,v-first",
+        (
+            "watertight",
+            &bvh,
+            kernel(Accel::Bvh, TriangleTest::Watertight),
+        ),
+        ("u,v-first", &bvh, kernel(Accel::Bvh, uv)),
+        full,
+        reps,
+    )?;
     Ok(SeminarPart {
         uv_vs_t_brute,
         uv_vs_t_bvh,
         bvh_vs_brute,
+        watertight_vs_uv_bvh,
     })
 }
 
@@ -674,7 +691,8 @@ fn part_cpu(args: &Args) -> anyhow::Result<CpuPart> {
     let mut gpu_scene = GpuScene::new(&bunny);
     gpu_scene.build_bvh();
     let cpu = cpu::CpuScene::new(&gpu_scene).map_err(anyhow::Error::msg)?;
-    let k = KernelOptions::default();
+    // The port implements the seminar's u,v-first Möller–Trumbore.
+    let k = kernel(Accel::Bvh, TriangleTest::UvFirst);
     let up = upload(&mut r, &bunny, k)?;
     let (w, h) = up.size();
     let reps = if args.quick { 2 } else { 5 };
@@ -750,6 +768,28 @@ fn own_ticks() -> u64 {
     f.get(11).copied().unwrap_or(0) + f.get(12).copied().unwrap_or(0)
 }
 
+/// Waits (at most 30 s per part and 120 s per run) until other processes
+/// use less than a third of a core over one second, so that measurements
+/// start on a quiet machine where possible; returns the seconds waited. The
+/// machine's load during each part is reported either way.
+fn wait_quiet() -> f64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static WAITED_MS: AtomicU64 = AtomicU64::new(0);
+    let budget =
+        Duration::from_millis(120_000u64.saturating_sub(WAITED_MS.load(Ordering::Relaxed)))
+            .min(Duration::from_secs(30));
+    let t0 = Instant::now();
+    while t0.elapsed() < budget {
+        let b0 = machine_busy_ticks();
+        std::thread::sleep(Duration::from_secs(1));
+        if (machine_busy_ticks() - b0) < 33 {
+            break;
+        }
+    }
+    WAITED_MS.fetch_add(t0.elapsed().as_millis() as u64, Ordering::Relaxed);
+    t0.elapsed().as_secs_f64()
+}
+
 /// Busy CPU time of the whole machine in clock ticks (1/100 s).
 fn machine_busy_ticks() -> u64 {
     let stat = std::fs::read_to_string("/proc/stat").unwrap_or_default();
@@ -805,6 +845,10 @@ fn child_with<T: for<'de> Deserialize<'de>>(
     for (k, v) in env {
         cmd.env(k, v);
     }
+    let waited = wait_quiet();
+    if waited > 1.0 {
+        eprintln!("bench: waited {waited:.0} s for other processes to quieten");
+    }
     let t0 = Instant::now();
     let busy0 = machine_busy_ticks();
     eprintln!("bench: {part} {env:?}");
@@ -859,6 +903,7 @@ fn main() -> anyhow::Result<()> {
             .trim_end_matches(" --")
             .to_string(),
         quick: args.quick,
+        default_triangle_test: format!("{:?}", TriangleTest::default()),
         ..Default::default()
     };
     let mut parts = Vec::new();
@@ -1037,6 +1082,76 @@ fn profile(args: &Args, parts: &mut Vec<PartInfo>) -> Profile {
 
 /// The report's "what stands in the way" section, from this run's figures.
 pub fn analysis(r: &Results) -> String {
-    let _ = r;
-    String::from("TODO\n")
+    let bunny = &r.throughput.scenes[0];
+    let cpu = &r.cpu;
+    let base = bunny.render_ms.median;
+    let u = cpu.simd8_utilisation;
+    let mut o = String::new();
+    let jit = r
+        .profile
+        .dsos
+        .iter()
+        .find(|d| d.0.starts_with("[JIT]"))
+        .map_or(f64::NAN, |d| d.1);
+    let llvm: f64 = r
+        .profile
+        .dsos
+        .iter()
+        .filter(|d| d.0.contains("LLVM"))
+        .map(|d| d.1)
+        .sum();
+    o.push_str(&format!(
+        "1. **The time is in the kernel itself.** The per-frame figure excludes compilation, and {}: the rest of lavapipe (dispatch, thread pool, copies) is small, so closing the gap means making the JIT-compiled traversal loop faster, not the driver around it.\n",
+        if r.profile.skipped.is_none() {
+            format!("in the profile above {jit:.0}% of all samples are in lavapipe's JIT-compiled kernel and {llvm:.0}% in LLVM compiling it (a one-off, cold)")
+        } else {
+            "no profile was taken in this run".to_string()
+        }
+    ));
+    o.push_str(&format!(
+        "2. **Divergence.** lavapipe runs the 8×8 workgroup as SIMD groups of 8 invocations (a row of 8 pixels, one per 32-bit lane of a 256-bit register); a loop iterates until the slowest lane is done. Replaying the kernel's traversal on the CPU with the same BVH (`CpuScene::traversal_steps`: node visits plus triangle tests, {:.1} per pixel on average for the primary and shadow ray together) gives a SIMD-8 utilisation of **{:.0}%**: {:.0}% of lane-iterations are idle lanes waiting for the slowest ray of their group, so the 8-wide kernel does at most {:.1} scalar traversals' worth of work per iteration.\n",
+        cpu.mean_steps,
+        u * 100.0,
+        (1.0 - u) * 100.0,
+        8.0 * u
+    ));
+    o.push_str(&format!(
+        "3. **Cost per lane-iteration.** The plain Rust port of the same algorithm on the same {} threads takes {:.1} ms; lavapipe takes {:.1} ms ({:.2}×). Had each SIMD-8 iteration cost what one scalar iteration costs, lavapipe would be {:.1}× faster than the port; it is {:.2}× slower instead, so one 8-wide iteration of the generated code costs about {:.0}× a scalar iteration of rustc's code: gathers for every node and triangle load (`bvh_nodes[i]` with a different `i` per lane), the per-lane traversal stack in memory (`array<u32, 64>` indexed by a per-lane `sp` becomes scattered stores and loads), masking of every branch, and the bounds clamping naga leaves on local arrays.\n",
+        cpu.threads,
+        cpu.cpu_ms.median,
+        cpu.gpu_ms.median,
+        cpu.gpu_ms.median / cpu.cpu_ms.median,
+        8.0 * u,
+        cpu.gpu_ms.median / cpu.cpu_ms.median,
+        8.0 * u * cpu.gpu_ms.median / cpu.cpu_ms.median
+    ));
+    o.push_str(&format!(
+        "4. **The peers' advantage.** Embree's 16-ray packets (24.7 ms) and Mitsuba's LLVM variant (38.7 ms) trace coherent bundles with hand-tuned SIMD box tests and keep one traversal stack per packet, not per lane; Embree's single-ray mode (61.2 ms) is still a well-tuned scalar kernel with a wide BVH. penumbra, at {:.1} ms, is {:.1}× Mitsuba's LLVM time. The likely steps, in order of expected gain: a wider BVH (4 children, one SIMD box test per node), a short-stack or stackless traversal so the stack stays in registers, ray sorting or packet-style traversal within a SIMD group to raise the {:.0}% utilisation, and fewer gathers (quantised node boxes, triangles stored in leaf order).\n",
+        base,
+        base / 38.7,
+        u * 100.0
+    ));
+    let knob = |name: &str, value: &str| {
+        r.knobs
+            .iter()
+            .find(|k| k.env.iter().any(|(n, v)| n == name && v == value))
+    };
+    if let (Some(w128), Some(w512)) = (
+        knob("LP_NATIVE_VECTOR_WIDTH", "128"),
+        knob("LP_NATIVE_VECTOR_WIDTH", "512"),
+    ) {
+        o.push_str(&format!(
+            "5. **lavapipe's knobs** (section 5) do not close the gap: 128-bit vectors (4 lanes) run at {:.2}× the default speed and 512-bit (16 lanes, AVX-512) at {:.2}×; {}\n",
+            w128.speedup_vs_default.median,
+            w512.speedup_vs_default.median,
+            match knob("LP_NUM_THREADS", "1") {
+                Some(t1) => format!(
+                    "one thread instead of two runs at {:.2}× (≈ 0.5 would mean perfect use of the second core; more means the second core was partly taken by other processes).",
+                    t1.speedup_vs_default.median
+                ),
+                None => String::new(),
+            }
+        ));
+    }
+    o
 }

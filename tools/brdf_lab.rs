@@ -77,7 +77,7 @@ fn main() -> anyhow::Result<()> {
          * **reciprocal**: max |f(a,b) − f(b,a)| / max(f(a,b), f(b,a)) over the same pairs \
          (tolerance 1e-9);\n\
          * **max a(ω_o)** = ∫ f(ω_i, ω_o) cos θ_i dω_i and **max R(ω_i)** = ∫ f(ω_i, ω_o) cos θ_o dω_o \
-         over θ ∈ {0, 5, …, 85, 88, 89, 89.5, 89.9}° (φ = 0; the models are isotropic); both must be ≤ 1. \
+         over θ ∈ {0, 5, …, 85, 88, 89, 89.5, 89.9, 89.99, 89.999}° (φ = 0; the models are isotropic); both must be ≤ 1. \
          Product quadrature, Gauss–Legendre in θ × midpoint in φ (rule n_θ×n_φ in the last column); \
          ± is the a-posteriori error estimate |I(n_θ, n_φ) − I(n_θ/2, n_φ/2)|.\n\n",
     );

@@ -29,6 +29,7 @@ pub const SHADER_FILES: &[&str] = &[
     "bvh.wgsl",
     "sampling.wgsl",
     "queries.wgsl",
+    "aov.wgsl",
 ];
 
 /// The files built into the binary, so an installed `penumbra` needs no
@@ -50,6 +51,7 @@ const EMBEDDED: &[&str] = &[
     include_str!("../../shaders/bvh.wgsl"),
     include_str!("../../shaders/sampling.wgsl"),
     include_str!("../../shaders/queries.wgsl"),
+    include_str!("../../shaders/aov.wgsl"),
 ];
 
 /// The compute kernel's entry point.
@@ -354,7 +356,7 @@ impl std::str::FromStr for TriangleTest {
 }
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 12] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -368,6 +370,7 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 12] {
         ("HAS_CHECKER", f.checker),
         ("HAS_AREA_LIGHTS", f.area_lights),
         ("PIXEL_JITTER", f.pixel_jitter),
+        ("HAS_AOV", f.aov),
     ]
 }
 
@@ -416,6 +419,7 @@ mod tests {
             checker: true,
             area_lights: true,
             pixel_jitter: true,
+            aov: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [

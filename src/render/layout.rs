@@ -176,6 +176,20 @@ pub struct QueryHit {
     pub _pad2: u32,
 }
 
+/// Mirrors `Aov` in `shaders/aov.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Aov {
+    pub depth: f32,
+    pub normal_x: f32,
+    pub normal_y: f32,
+    pub normal_z: f32,
+    pub u: f32,
+    pub v: f32,
+    pub object: u32,
+    pub primitive: u32,
+}
+
 /// `bvh_prims` entries with this bit set are spheres, else triangles.
 pub const PRIM_SPHERE: u32 = 1 << 31;
 
@@ -513,6 +527,11 @@ mod tests {
             ),
             layout!("BvhNode", BvhNode, [min, index, max, count]),
             layout!("QueryRay", QueryRay, [origin, _pad0, dir, _pad1]),
+            layout!(
+                "Aov",
+                Aov,
+                [depth, normal_x, normal_y, normal_z, u, v, object, primitive]
+            ),
             layout!(
                 "QueryHit",
                 QueryHit,

@@ -27,7 +27,7 @@ pub use trace::{HitKind, TraceHit, TraceRay};
 const TILE: u32 = 8;
 
 /// Binding types of set 0, in binding order (see `shaders/`).
-const BINDINGS: [BindingType; 13] = [
+const BINDINGS: [BindingType; 14] = [
     BindingType::Uniform,          // 0 globals
     BindingType::StorageReadOnly,  // 1 planes
     BindingType::StorageReadOnly,  // 2 spheres
@@ -41,6 +41,7 @@ const BINDINGS: [BindingType; 13] = [
     BindingType::StorageReadOnly,  // 10 BVH primitive references
     BindingType::StorageReadOnly,  // 11 query rays (ray queries only)
     BindingType::StorageReadWrite, // 12 query hits (ray queries only)
+    BindingType::StorageReadWrite, // 13 AOVs (when asked for)
 ];
 
 /// How to set up a [`Renderer`].
@@ -203,6 +204,48 @@ pub struct PassInfo {
     pub elapsed: Duration,
 }
 
+/// Arbitrary output variables of each pixel's first primary ray, row-major
+/// like the image.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aovs {
+    /// Distance along the primary ray; `f32::INFINITY` where it hit nothing.
+    pub depth: Vec<f32>,
+    /// Unit geometric normal facing the viewer (world space); 0 on misses.
+    pub normal: Vec<[f32; 3]>,
+    /// Barycentric (u, v) of triangle hits (weights of the second and third
+    /// vertex); 0 elsewhere.
+    pub uv: Vec<[f32; 2]>,
+    /// Index of the scene object hit; `u32::MAX` on misses.
+    pub object: Vec<u32>,
+    /// Index of the triangle within its object (0 for planes and spheres);
+    /// `u32::MAX` on misses.
+    pub primitive: Vec<u32>,
+}
+
+impl Aovs {
+    fn from_gpu(bytes: &[u8], n: usize, scene: &UploadedScene) -> Aovs {
+        let raw: Vec<layout::Aov> = bytemuck::pod_collect_to_vec(&bytes[..n * 32]);
+        let mut a = Aovs::default();
+        for r in raw {
+            a.depth.push(r.depth);
+            a.normal.push([r.normal_x, r.normal_y, r.normal_z]);
+            a.uv.push([r.u, r.v]);
+            a.object.push(r.object);
+            let first = scene
+                .first_triangle
+                .get(r.object as usize)
+                .copied()
+                .flatten();
+            a.primitive.push(match (r.object, first) {
+                (u32::MAX, _) => u32::MAX,
+                (_, Some(f)) => r.primitive.wrapping_sub(f),
+                (_, None) => 0,
+            });
+        }
+        a
+    }
+}
+
 /// A scene laid out and uploaded to the device, ready to render.
 pub struct UploadedScene {
     buffers: Vec<Buffer>,
@@ -210,6 +253,8 @@ pub struct UploadedScene {
     kernel: KernelOptions,
     /// The camera position the geometry is relative to.
     eye: glam::DVec3,
+    /// Per object: index of its first triangle (None for planes, spheres).
+    first_triangle: Vec<Option<u32>>,
     width: u32,
     height: u32,
     accel_build: Duration,
@@ -408,12 +453,31 @@ impl Renderer {
             // Ray-query buffers: placeholders, replaced per Renderer::trace.
             ctx.create_buffer("query rays", BufferUsage::Storage, 16)?,
             ctx.create_buffer("query hits", BufferUsage::Storage, 16)?,
+            // AOV buffer: a placeholder, replaced when AOVs are asked for.
+            ctx.create_buffer("AOVs", BufferUsage::Storage, 16)?,
         ];
+        // First triangle of each triangle-based object, to number AOV
+        // primitives within their object.
+        let mut next = 0u32;
+        let first_triangle = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let n = match &o.shape {
+                    crate::scene::Shape::Triangle(_) => 1,
+                    crate::scene::Shape::Mesh(m) => m.indices.len() as u32,
+                    _ => return None,
+                };
+                next += n;
+                Some(next - n)
+            })
+            .collect();
         Ok(UploadedScene {
             buffers,
             features: scene.features(),
             kernel: self.kernel,
             eye: scene.camera.position,
+            first_triangle,
             width,
             height,
             accel_build,
@@ -449,6 +513,34 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
+        Ok(self
+            .render_passes(scene, width, height, sampling, on_pass, false)?
+            .0)
+    }
+
+    /// [`Renderer::render_progressive`] that also returns the arbitrary
+    /// output variables of each pixel's first primary ray.
+    pub fn render_with_aovs(
+        &mut self,
+        scene: &UploadedScene,
+        width: u32,
+        height: u32,
+        sampling: &Sampling,
+        on_pass: &mut dyn FnMut(&PassInfo),
+    ) -> Result<(Frame, Aovs), RenderError> {
+        let (frame, aovs) = self.render_passes(scene, width, height, sampling, on_pass, true)?;
+        Ok((frame, aovs.unwrap_or_default()))
+    }
+
+    fn render_passes(
+        &mut self,
+        scene: &UploadedScene,
+        width: u32,
+        height: u32,
+        sampling: &Sampling,
+        on_pass: &mut dyn FnMut(&PassInfo),
+        with_aovs: bool,
+    ) -> Result<(Frame, Option<Aovs>), RenderError> {
         if width == 0 || height == 0 || width > scene.width || height > scene.height {
             return Err(RenderError::Scene {
                 field: "camera.width/camera.height".into(),
@@ -467,6 +559,7 @@ impl Renderer {
         // Pixel jitter is compiled in only when there is more than one sample.
         let features = Features {
             pixel_jitter: sampling.spp > 1,
+            aov: with_aovs,
             ..scene.features
         };
         // The BVH buffers are empty for a scene uploaded for brute force.
@@ -479,7 +572,16 @@ impl Renderer {
         self.kernel = saved;
         let (shader_compile, pipeline_creation, driver_compile) = compiled?;
         let ctx = &self.context;
-        let refs: Vec<_> = scene.buffers.iter().collect();
+        let aov_buffer = if with_aovs {
+            let bytes = width as u64 * height as u64 * std::mem::size_of::<layout::Aov>() as u64;
+            Some(ctx.create_buffer("AOVs", BufferUsage::Storage, bytes)?)
+        } else {
+            None
+        };
+        let mut refs: Vec<_> = scene.buffers.iter().collect();
+        if let Some(b) = &aov_buffer {
+            refs[13] = b;
+        }
         let pipeline = &self.pipelines[&(features, key_kernel)];
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
         let read_counters = || -> Result<[u32; 2], RenderError> {
@@ -528,33 +630,40 @@ impl Renderer {
                 *p = p.map(|c| c * inv);
             }
         }
+        let aovs = match &aov_buffer {
+            Some(b) => Some(Aovs::from_gpu(&ctx.read_buffer(b)?, n, scene)),
+            None => None,
+        };
         let readback = t1.elapsed();
         ctx.check_validation()?;
 
-        Ok(Frame {
-            image: Image {
-                width,
-                height,
-                pixels,
-            },
-            stats: RenderStats {
-                primary_rays,
-                shadow_rays,
-                passes,
-                bvh_nodes: scene.bvh_nodes,
-                bvh_depth: scene.bvh_depth,
-                bvh_bytes: scene.bvh_bytes,
-                timings: Timings {
-                    shader_compile,
-                    pipeline_creation,
-                    driver_compile,
-                    accel_build: Duration::ZERO,
-                    upload: Duration::ZERO,
-                    render,
-                    readback,
+        Ok((
+            Frame {
+                image: Image {
+                    width,
+                    height,
+                    pixels,
+                },
+                stats: RenderStats {
+                    primary_rays,
+                    shadow_rays,
+                    passes,
+                    bvh_nodes: scene.bvh_nodes,
+                    bvh_depth: scene.bvh_depth,
+                    bvh_bytes: scene.bvh_bytes,
+                    timings: Timings {
+                        shader_compile,
+                        pipeline_creation,
+                        driver_compile,
+                        accel_build: Duration::ZERO,
+                        upload: Duration::ZERO,
+                        render,
+                        readback,
+                    },
                 },
             },
-        })
+            aovs,
+        ))
     }
 
     /// Renders one frame of a validated scene: [`Renderer::upload`] then

@@ -172,7 +172,7 @@ pub fn subdivided_bunny(bunny: &Scene, levels: u32) -> Scene {
 /// 1/count of the intensity (the image keeps its brightness).
 pub fn with_lights(bunny: &Scene, count: usize) -> Scene {
     let mut scene = bunny.clone();
-    let base: Light = scene.lights[0].clone();
+    let base: Light = scene.lights[0];
     let LightKind::Directional { direction } = base.kind else {
         panic!("the bunny scene's light is directional");
     };
@@ -183,7 +183,7 @@ pub fn with_lights(bunny: &Scene, count: usize) -> Scene {
             Light {
                 kind: LightKind::Directional { direction: turned },
                 intensity: base.intensity / count as f32,
-                ..base.clone()
+                ..base
             }
         })
         .collect();

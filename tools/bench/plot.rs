@@ -36,6 +36,8 @@ fn register_font() -> anyhow::Result<()> {
 }
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+/// (legend, colour, points).
+type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 
 fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow::anyhow!("plot: {e:?}")
@@ -50,7 +52,8 @@ fn log_panel(
     area: &Area,
     title: &str,
     y_label: &str,
-    series: &[(&str, RGBColor, Vec<(f64, f64)>)],
+    series: &[Series],
+    y_decimals: usize,
 ) -> anyhow::Result<()> {
     let xs = series.iter().flat_map(|s| s.2.iter().map(|p| p.0));
     let (x0, x1) = (
@@ -70,6 +73,7 @@ fn log_panel(
         .x_desc("triangles (log scale)")
         .y_desc(y_label)
         .x_label_formatter(&|x| format_count(*x))
+        .y_label_formatter(&|y| format!("{y:.y_decimals$}"))
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
@@ -117,6 +121,8 @@ fn linear_panel(
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
+        .x_label_formatter(&|x| format!("{x:.1}"))
+        .y_label_formatter(&|y| format!("{y:.0}"))
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
@@ -183,6 +189,7 @@ pub fn scaling(r: &Results, path: &Path) -> anyhow::Result<()> {
                         .collect(),
                 ),
             ],
+            0,
         )?;
         log_panel(
             &panels[1],
@@ -195,6 +202,7 @@ pub fn scaling(r: &Results, path: &Path) -> anyhow::Result<()> {
                     .map(|t| (t.triangles as f64, t.bvh_bytes as f64 / 1048576.0))
                     .collect(),
             )],
+            1,
         )?;
         let px: Vec<(f64, f64)> = r
             .scaling
