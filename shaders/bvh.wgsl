@@ -36,7 +36,8 @@ fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -
     let near = min(t0, t1);
     let far = max(t0, t1);
     let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
-    let t_exit = min(min(far.x, far.y), far.z) * 1.0000004;
+    // 1.0000005 rounds up to 1 + 4·2⁻²³ in f32, just above 1 + 2γ₃.
+    let t_exit = min(min(far.x, far.y), far.z) * 1.0000005;
     if t_enter <= min(t_exit, t_max) {
         return t_enter;
     }

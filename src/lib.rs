@@ -11,8 +11,8 @@
 //! * [`render`] turns it into GPU buffers and a specialised compute kernel
 //!   (WGSL from `shaders/`, compiled by naga) and runs it through
 //! * [`vulkan`], the only module that talks to Vulkan (`ash`);
-//! * [`reference`] renders the same image on the CPU in `f64` (the ground
-//!   truth for error figures);
+//! * [`reference`](mod@reference) renders the same image on the CPU in `f64`
+//!   (the ground truth for error figures);
 //! * [`output`] writes PNG (sRGB) and OpenEXR (linear) files atomically.
 //!
 //! ```no_run

@@ -57,6 +57,10 @@ pub struct Args {
     /// Skip the lavapipe knob runs (on a GPU they do not apply).
     #[arg(long)]
     no_knobs: bool,
+    /// Rewrite bench.md and scaling.png from this bench.json (no
+    /// measurement).
+    #[arg(long)]
+    from_json: Option<PathBuf>,
     /// Internal: run one part in this process and write its JSON here.
     #[arg(long, hide = true, requires = "child_out")]
     child: Option<String>,
@@ -890,6 +894,13 @@ fn main() -> anyhow::Result<()> {
         let out = args.child_out.clone().expect("clap requires --child-out");
         return run_child(&args, part, &out);
     }
+    if let Some(path) = &args.from_json {
+        let results: Results = serde_json::from_str(&std::fs::read_to_string(path)?)?;
+        std::fs::create_dir_all(&args.out)?;
+        plot::scaling(&results, &args.out.join("scaling.png"))?;
+        std::fs::write(args.out.join("bench.md"), report::markdown(&results))?;
+        return Ok(());
+    }
     let t0 = Instant::now();
     let mut results = Results {
         machine: report::cpu_model(),
@@ -908,7 +919,21 @@ fn main() -> anyhow::Result<()> {
     };
     let mut parts = Vec::new();
     let p = &mut parts;
-    results.throughput = child(&args, p, "throughput", &[])?;
+    // Section 1's absolute figures suffer most from other processes taking
+    // a core: run it up to three times while others used more than half a
+    // core, and keep the quietest run (chosen by load, not by result).
+    let mut best: Option<(f64, ThroughputPart)> = None;
+    for _ in 0..3 {
+        let t: ThroughputPart = child(&args, p, "throughput", &[])?;
+        let others = p.last().map_or(0.0, |i| i.other_cores);
+        if best.as_ref().is_none_or(|b| others < b.0) {
+            best = Some((others, t));
+        }
+        if others < 0.5 {
+            break;
+        }
+    }
+    results.throughput = best.expect("at least one run").1;
     results.seminar = child(&args, p, "seminar", &[])?;
     results.cpu = child(&args, p, "cpu", &[])?;
     results.specialise = child(&args, p, "specialise", &[])?;
@@ -1116,7 +1141,7 @@ pub fn analysis(r: &Results) -> String {
         8.0 * u
     ));
     o.push_str(&format!(
-        "3. **Cost per lane-iteration.** The plain Rust port of the same algorithm on the same {} threads takes {:.1} ms; lavapipe takes {:.1} ms ({:.2}×). Had each SIMD-8 iteration cost what one scalar iteration costs, lavapipe would be {:.1}× faster than the port; it is {:.2}× slower instead, so one 8-wide iteration of the generated code costs about {:.0}× a scalar iteration of rustc's code: gathers for every node and triangle load (`bvh_nodes[i]` with a different `i` per lane), the per-lane traversal stack in memory (`array<u32, 64>` indexed by a per-lane `sp` becomes scattered stores and loads), masking of every branch, and the bounds clamping naga leaves on local arrays.\n",
+        "3. **Cost per lane-iteration.** The plain Rust port of the same algorithm on the same {} threads takes {:.1} ms; lavapipe takes {:.1} ms ({:.2}×). Had each SIMD-8 iteration cost what one scalar iteration costs, lavapipe would be {:.1}× faster than the port; it is {:.2}× slower instead, so one 8-wide iteration of the generated code costs about {:.0}× a scalar iteration of rustc's code. Likely reasons (read from the kernel's structure, not measured one by one): gathers for every node and triangle load (`bvh_nodes[i]` with a different `i` per lane), the per-lane traversal stack in memory (`array<u32, 64>` indexed by a per-lane `sp` becomes scattered stores and loads), masking of every branch, and the bounds clamping naga leaves on local arrays. The kernel's one `workgroupBarrier` (for the ray counters) also makes lavapipe compile it as a coroutine (`llvm::coro::*` in the profile); the barrier sits after all the ray tracing, so little should be live across it, but its run-time cost was not measured here.\n",
         cpu.threads,
         cpu.cpu_ms.median,
         cpu.gpu_ms.median,

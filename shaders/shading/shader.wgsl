@@ -54,7 +54,9 @@ fn shade(ray: Ray, hit: Hit, pixel: u32, shadow_rays: ptr<function, u32>) -> vec
             }
             let ls = sample_light(light, hit.position, uv);
             let ln = dot(ls.to_light, n);
-            if ln <= 0.0 || ls.falloff <= 0.0 {
+            // Light below the geometric surface (possible with interpolated
+            // normals): the surface itself is in the way, no ray needed.
+            if ln <= 0.0 || ls.falloff <= 0.0 || dot(ls.to_light, hit.geometric_normal) <= 0.0 {
                 continue;
             }
             *shadow_rays += 1u;

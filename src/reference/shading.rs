@@ -135,7 +135,9 @@ pub fn shade(
             );
             let ls = sample_light(light, hit.position, uv);
             let ln = ls.to_light.dot(n);
-            if ln <= 0.0 || ls.falloff <= 0.0 {
+            // Light below the geometric surface: the surface blocks it, no
+            // ray is cast (as on the GPU).
+            if ln <= 0.0 || ls.falloff <= 0.0 || ls.to_light.dot(hit.geometric_normal) <= 0.0 {
                 continue;
             }
             *shadow_rays += 1;

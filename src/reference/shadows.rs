@@ -34,11 +34,7 @@ pub const OFFSET_SCALE: f64 = 1.0 / 4_294_967_296.0;
 
 /// Whether anything blocks the light sample `ls` from `hit`.
 pub fn occluded(world: &World, hit: &Hit, ls: &LightSample) -> bool {
-    // Light below the geometric surface (possible with interpolated
-    // normals): the surface itself is in the way.
-    if ls.to_light.dot(hit.geometric_normal) <= 0.0 {
-        return true;
-    }
+    // (shade() only asks for lights above the geometric surface.)
     let origin = if hit.kind == Kind::Triangle {
         hit.position + hit.geometric_normal * (hit.error_scale * OFFSET_SCALE)
     } else {

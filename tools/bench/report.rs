@@ -612,7 +612,7 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(o, "\n## Machine load during the run\n");
     let _ = writeln!(
         o,
-        "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. For every measuring process: its own CPU use and everyone else's, averaged over its run (from /proc/stat), in cores. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
+        "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. Each part waits (up to 30 s) for a quiet second before it starts, and section 1 is repeated (up to three times) while others used more than half a core, keeping the quietest run. For every measuring process: its own CPU use and everyone else's, averaged over its run (from /proc/stat), in cores. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
     );
     let _ = writeln!(
         o,
