@@ -56,6 +56,18 @@ fn diff(args: DiffArgs) -> anyhow::Result<()> {
     for line in m.lines() {
         println!("{line}");
     }
+    // Depth AOVs (`--aov depth`), when both files have them.
+    let depth = |p: &std::path::Path| {
+        let exr = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        exr.then(|| penumbra::metrics::read_depth(p)).flatten()
+    };
+    if let (Some(za), Some(zb)) = (depth(&args.a), depth(&args.b)) {
+        if let Some(d) = penumbra::metrics::depth_error(&za, &zb) {
+            println!("depth_max_relative_error: {}", d.max_relative);
+            println!("depth_mean_relative_error: {}", d.mean_relative);
+            println!("depth_hit_mismatches: {}", d.hit_mismatches);
+        }
+    }
     Ok(())
 }
 
@@ -147,7 +159,7 @@ struct RenderArgs {
     reference: bool,
     /// Also write arbitrary output variables as channels of the .exr output:
     /// any of depth, normal, uv, id (comma-separated).
-    #[arg(long, conflicts_with = "reference")]
+    #[arg(long)]
     aov: Option<output::AovSet>,
 }
 
@@ -217,7 +229,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             seed,
             time_budget,
         };
-        return render_reference(&scene_data, &sampling, &kernel, &out, load);
+        return render_reference(&scene_data, &sampling, &kernel, &out, load, aov);
     }
     let mut renderer = Renderer::new(&RendererOptions {
         device,
@@ -286,10 +298,20 @@ fn render_reference(
     kernel: &KernelOptions,
     out: &std::path::Path,
     load: std::time::Duration,
+    aov: Option<output::AovSet>,
 ) -> anyhow::Result<()> {
-    let frame = penumbra::reference::render(scene, sampling, kernel);
-    let t1 = Instant::now();
-    output::write_image(out, &frame.image)?;
+    let t1;
+    let frame = if let Some(set) = aov {
+        let (frame, aovs) = penumbra::reference::render_with_aovs(scene, sampling, kernel);
+        t1 = Instant::now();
+        output::write_exr_with_aovs(out, &frame.image, &aovs, set)?;
+        frame
+    } else {
+        let frame = penumbra::reference::render(scene, sampling, kernel);
+        t1 = Instant::now();
+        output::write_image(out, &frame.image)?;
+        frame
+    };
     let write = t1.elapsed();
     let s = &frame.stats;
     println!(

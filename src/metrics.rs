@@ -338,3 +338,57 @@ mod tests {
         }
     }
 }
+
+/// Relative error of one depth AOV against another: over pixels where both
+/// hit something (finite depth), `|a − b| / a`; and the pixels where exactly
+/// one of them hit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthError {
+    /// Largest relative error.
+    pub max_relative: f64,
+    /// Mean relative error.
+    pub mean_relative: f64,
+    /// Pixels where one depth is finite (a hit) and the other is not.
+    pub hit_mismatches: u64,
+}
+
+/// Compares two depth AOVs (reference first); `None` if their lengths differ.
+pub fn depth_error(reference: &[f32], test: &[f32]) -> Option<DepthError> {
+    if reference.len() != test.len() {
+        return None;
+    }
+    let mut e = DepthError::default();
+    let mut n = 0u64;
+    for (&a, &b) in reference.iter().zip(test) {
+        match (a.is_finite(), b.is_finite()) {
+            (true, true) => {
+                let rel = ((a as f64 - b as f64) / a as f64).abs();
+                e.max_relative = e.max_relative.max(rel);
+                e.mean_relative += rel;
+                n += 1;
+            }
+            (false, false) => {}
+            _ => e.hit_mismatches += 1,
+        }
+    }
+    if n > 0 {
+        e.mean_relative /= n as f64;
+    }
+    Some(e)
+}
+
+/// The `Z` (depth) channel of an OpenEXR file, if it has one.
+pub fn read_depth(path: &Path) -> Option<Vec<f32>> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).ok()?;
+    let layer = image.layer_data.first()?;
+    let z = layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == "Z")?;
+    match &z.sample_data {
+        exr::prelude::FlatSamples::F32(v) => Some(v.clone()),
+        exr::prelude::FlatSamples::F16(v) => Some(v.iter().map(|h| h.to_f32()).collect()),
+        exr::prelude::FlatSamples::U32(_) => None,
+    }
+}

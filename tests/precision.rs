@@ -208,3 +208,84 @@ fn small_spheres_far_away_and_extreme_fields_of_view() {
         "distant: {wrong} of {checked} pixels wrong"
     );
 }
+
+/// The GPU image and depth against the f64 reference for one scene: image
+/// channels within 2e-3 on all but 0.5 % of the pixels (f32 against f64 can
+/// tip a pixel at a silhouette or shadow edge; the tolerance is argued in
+/// tests/reference.rs), and every depth where both saw the same object
+/// within the bound derived in tests/aov.rs: 64 · 2⁻²⁴ / |n·d|.
+fn check_against_reference(scene: &Scene, what: &str) {
+    use penumbra::render::{KernelOptions, Sampling};
+    let (gpu, gpu_aov) = {
+        let mut r = support::renderer();
+        let up = r.upload(scene).unwrap();
+        let (w, h) = up.size();
+        r.render_with_aovs(&up, w, h, &Sampling::default(), &mut |_| {})
+            .unwrap()
+    };
+    let (reference, ref_aov) = penumbra::reference::render_with_aovs(
+        scene,
+        &Sampling::default(),
+        &KernelOptions::default(),
+    );
+    let (frac, worst) = agreement(&reference.image, &gpu.image, 2e-3);
+    eprintln!(
+        "{what}: {:.3}% of pixels within 2e-3 of the reference, worst {worst}",
+        frac * 100.0
+    );
+    assert!(
+        frac >= 0.995,
+        "{what}: only {:.3}% agree with the reference",
+        frac * 100.0
+    );
+    let c = &scene.camera;
+    let (hw, hh) = c.half_extent();
+    let mut worst_ratio = 0f64;
+    for i in 0..gpu_aov.depth.len() {
+        if gpu_aov.object[i] != ref_aov.object[i] || ref_aov.object[i] == u32::MAX {
+            continue;
+        }
+        let (x, y) = ((i as u32 % c.width) as f64, (i as u32 / c.width) as f64);
+        let d = match c.projection {
+            Projection::Perspective { .. } => {
+                let sx = ((x + 0.5) / c.width as f64 * 2.0 - 1.0) * hw;
+                let sy = (1.0 - (y + 0.5) / c.height as f64 * 2.0) * hh;
+                (c.orientation.x_axis * sx + c.orientation.y_axis * sy - c.orientation.z_axis)
+                    .normalize()
+            }
+            Projection::Orthographic { .. } => -c.orientation.z_axis,
+        };
+        let n = DVec3::from_array(ref_aov.normal[i].map(f64::from));
+        let (a, b) = (ref_aov.depth[i] as f64, gpu_aov.depth[i] as f64);
+        let rel = ((a - b) / a).abs();
+        let bound = 64.0 * 2f64.powi(-24) / n.dot(d).abs().max(1e-6);
+        worst_ratio = worst_ratio.max(rel / bound);
+        assert!(
+            rel <= bound,
+            "{what}: depth at pixel {i}: relative error {rel:e} above {bound:e}"
+        );
+    }
+    eprintln!("{what}: worst depth error {:.2} of its bound", worst_ratio);
+}
+
+#[test]
+fn hard_cases_against_the_f64_reference() {
+    let scene = base();
+    check_against_reference(&scene, "near the origin");
+    for far in [1e3, 1e5, 1e7] {
+        let moved = transformed(&scene, DVec3::new(far, -0.37 * far, 0.61 * far), 1.0);
+        check_against_reference(&moved, &format!("offset {far:e}"));
+    }
+    for s in [1e-4, 1e4] {
+        check_against_reference(
+            &transformed(&scene, DVec3::ZERO, s),
+            &format!("scale {s:e}"),
+        );
+    }
+    let mut narrow = scene.clone();
+    narrow.camera.projection = Projection::Perspective { vfov_deg: 0.5 };
+    check_against_reference(&narrow, "0.5° field of view");
+    let mut wide = scene;
+    wide.camera.projection = Projection::Perspective { vfov_deg: 170.0 };
+    check_against_reference(&wide, "170° field of view");
+}

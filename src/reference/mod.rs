@@ -37,6 +37,7 @@
 //! reference always computes the exact version (watertight test in `f64`,
 //! robust shadow rays), which is what they are measured against.
 
+mod aov;
 pub mod bvh;
 pub mod camera;
 pub mod hit;
@@ -259,4 +260,16 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
             },
         },
     }
+}
+
+/// [`render`], plus the arbitrary output variables (depth, normal, uv, ids)
+/// of each pixel's first primary ray, numbered like the GPU's.
+pub fn render_with_aovs(
+    scene: &Scene,
+    sampling: &Sampling,
+    kernel: &KernelOptions,
+) -> (Frame, crate::render::Aovs) {
+    let frame = render(scene, sampling, kernel);
+    let world = World::new(scene, kernel.sampler, sampling.seed);
+    (frame, aov::aovs(&world, scene, sampling))
 }
