@@ -18,6 +18,9 @@
 
 use glam::DVec3;
 
+/// Primitive references with this bit set are spheres, else triangles.
+pub const PRIM_SPHERE: u32 = 1 << 31;
+
 /// Number of SAH bins per axis.
 pub const BINS: usize = 16;
 /// Largest leaf the builder makes (unless the primitives cannot be split).
@@ -160,6 +163,17 @@ impl Bvh {
             prims: order,
             depth,
         }
+    }
+
+    /// The primitive references of a tree built over `n_triangles` triangle
+    /// boxes followed by sphere boxes: triangle `i` stays `i`, sphere `j`
+    /// becomes `j | PRIM_SPHERE` (the encoding `shaders/bvh.wgsl` reads).
+    pub fn prim_refs(&self, n_triangles: usize) -> Vec<u32> {
+        let n = n_triangles as u32;
+        self.prims
+            .iter()
+            .map(|&p| if p < n { p } else { (p - n) | PRIM_SPHERE })
+            .collect()
     }
 
     /// Bytes the GPU copy takes (32 per node, 4 per primitive reference).

@@ -25,6 +25,9 @@ use penumbra::render::{
 use penumbra::scene::Scene;
 use plotters::prelude::*;
 
+#[path = "plot_common.rs"]
+mod plot_common;
+
 const RUNS: usize = 5;
 
 struct Row {
@@ -266,15 +269,7 @@ fn is_pareto(row: &Row, rows: &[Row]) -> bool {
 }
 
 fn plot(rows: &[Row]) -> anyhow::Result<()> {
-    let font = std::fs::read("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf").map_err(|e| {
-        anyhow::anyhow!("the plot needs DejaVuSans.ttf (apt-get install fonts-dejavu-core): {e}")
-    })?;
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        Box::leak(font.into_boxed_slice()),
-    )
-    .map_err(|_| anyhow::anyhow!("cannot load DejaVuSans.ttf"))?;
+    plot_common::register_font()?;
     let (w, h) = (900u32, 600u32);
     let mut pixels = vec![0u8; (w * h * 3) as usize];
     {
@@ -331,8 +326,6 @@ fn plot(rows: &[Row]) -> anyhow::Result<()> {
             .draw()?;
         root.present()?;
     }
-    image::RgbImage::from_raw(w, h, pixels)
-        .ok_or_else(|| anyhow::anyhow!("plot buffer size"))?
-        .save("docs/accuracy.png")?;
+    plot_common::save_png(pixels, w, h, "docs/accuracy.png")?;
     Ok(())
 }

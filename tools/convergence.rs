@@ -18,6 +18,9 @@ use penumbra::scene::{
 };
 use plotters::prelude::*;
 
+#[path = "plot_common.rs"]
+mod plot_common;
+
 const PX: u32 = 64;
 const HALF: f64 = 1.0;
 const COUNTS: [u32; 7] = [1, 4, 16, 64, 256, 1024, 4096];
@@ -133,15 +136,7 @@ fn main() -> anyhow::Result<()> {
 type Row = (u32, (f64, f64), (f64, f64));
 
 fn plot(rows: &[Row]) -> anyhow::Result<()> {
-    let font = std::fs::read("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf").map_err(|e| {
-        anyhow::anyhow!("the plot needs DejaVuSans.ttf (apt-get install fonts-dejavu-core): {e}")
-    })?;
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        Box::leak(font.into_boxed_slice()),
-    )
-    .map_err(|_| anyhow::anyhow!("cannot load DejaVuSans.ttf"))?;
+    plot_common::register_font()?;
     let (w, h) = (1200u32, 500u32);
     let mut pixels = vec![0u8; (w * h * 3) as usize];
     {
@@ -217,8 +212,6 @@ fn plot(rows: &[Row]) -> anyhow::Result<()> {
         }
         root.present()?;
     }
-    image::RgbImage::from_raw(w, h, pixels)
-        .ok_or_else(|| anyhow::anyhow!("plot buffer size"))?
-        .save("docs/convergence.png")?;
+    plot_common::save_png(pixels, w, h, "docs/convergence.png")?;
     Ok(())
 }

@@ -12,7 +12,7 @@ use super::Sphere;
 use crate::bvh::{Aabb, Bvh};
 
 /// `prims` entries with this bit set are spheres, else triangles (as on the GPU).
-pub const PRIM_SPHERE: u32 = 1 << 31;
+pub use crate::bvh::PRIM_SPHERE;
 
 /// One node, depth-first: an interior node's left child is the next node and
 /// `index` its right child; a leaf's `index..index + count` range of `prims`.
@@ -57,18 +57,7 @@ impl Accel {
             return Accel::default();
         }
         let bvh = Bvh::build(&boxes);
-        let n_tri = triangles.len() as u32;
-        let prims = bvh
-            .prims
-            .iter()
-            .map(|&p| {
-                if p < n_tri {
-                    p
-                } else {
-                    (p - n_tri) | PRIM_SPHERE
-                }
-            })
-            .collect();
+        let prims = bvh.prim_refs(triangles.len());
         let nodes = bvh
             .nodes
             .iter()

@@ -69,13 +69,12 @@ impl Light {
                 inner_angle,
                 outer_angle,
             } => {
-                let (ci, co) = (inner_angle.cos(), outer_angle.cos());
-                let scale = 1.0 / (ci - co).max(1e-3);
+                let (scale, offset) = LightKind::spot_cone_scale_offset(inner_angle, outer_angle);
                 Kind::Spot {
                     position,
                     axis: direction,
                     scale,
-                    offset: -co * scale,
+                    offset,
                 }
             }
             LightKind::Rect {

@@ -190,8 +190,7 @@ pub struct Aov {
     pub primitive: u32,
 }
 
-/// `bvh_prims` entries with this bit set are spheres, else triangles.
-pub const PRIM_SPHERE: u32 = 1 << 31;
+pub use crate::bvh::PRIM_SPHERE;
 
 /// Shader kinds, as in `shaders/shading/shader.wgsl`.
 pub const SHADER_PHONG: u32 = 0;
@@ -326,14 +325,13 @@ impl GpuScene {
                     inner_angle,
                     outer_angle,
                 } => {
-                    // KHR_lights_punctual: attenuation = clamp(cos·scale + offset)².
-                    let (ci, co) = (inner_angle.cos(), outer_angle.cos());
-                    let s = 1.0 / (ci - co).max(1e-3);
+                    let (scale, offset) =
+                        LightKind::spot_cone_scale_offset(inner_angle, outer_angle);
                     gl.kind = LIGHT_SPOT;
                     gl.position = f3(position - eye);
                     gl.direction = f3(direction);
-                    gl.cone_scale = s as f32;
-                    gl.cone_offset = (-co * s) as f32;
+                    gl.cone_scale = scale as f32;
+                    gl.cone_offset = offset as f32;
                 }
                 LightKind::Rect {
                     corner,
@@ -428,18 +426,7 @@ impl GpuScene {
             }
         }));
         let bvh = Bvh::build(&boxes);
-        let n_tri = self.triangles.len() as u32;
-        self.bvh_prims = bvh
-            .prims
-            .iter()
-            .map(|&p| {
-                if p < n_tri {
-                    p
-                } else {
-                    (p - n_tri) | PRIM_SPHERE
-                }
-            })
-            .collect();
+        self.bvh_prims = bvh.prim_refs(self.triangles.len());
         self.bvh_nodes = bvh
             .nodes
             .iter()

@@ -101,10 +101,18 @@ impl LightKind {
     /// from the light to the point: smoothstep-like
     /// `clamp((cos θ − cos outer) / (cos inner − cos outer), 0, 1)²`.
     pub fn spot_cone(cos_angle: f64, inner_angle: f64, outer_angle: f64) -> f64 {
+        let (scale, offset) = Self::spot_cone_scale_offset(inner_angle, outer_angle);
+        let a = (cos_angle * scale + offset).clamp(0.0, 1.0);
+        a * a
+    }
+
+    /// The cone attenuation as `clamp(cos θ · scale + offset, 0, 1)²`, the
+    /// form KHR_lights_punctual suggests for shaders (the difference of the
+    /// cosines is kept above 10⁻³ so equal angles cannot divide by zero).
+    pub fn spot_cone_scale_offset(inner_angle: f64, outer_angle: f64) -> (f64, f64) {
         let (ci, co) = (inner_angle.cos(), outer_angle.cos());
         let scale = 1.0 / (ci - co).max(1e-3);
-        let a = ((cos_angle - co) * scale).clamp(0.0, 1.0);
-        a * a
+        (scale, -co * scale)
     }
 }
 
