@@ -220,6 +220,10 @@ pub struct SpecialisePart {
     pub general: KernelCompile,
     /// A = general, B = specialised.
     pub frames: Pair,
+    /// The showcase (no area light, 1 spp): A = area-light sampling code
+    /// compiled in, B = left out (the default).
+    #[serde(default)]
+    pub sampling: Pair,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
@@ -683,6 +687,20 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
         "general vs specialised kernel",
         ("general", &up, general),
         ("specialised", &up, spec),
+        (w, h),
+        reps,
+    )?;
+    // The cost of the sampling code for a scene that does not need it.
+    let path = root().join("scenes/showcase.json");
+    let showcase = penumbra::loaders::load_scene(&path, &Default::default())?.scene;
+    let sampling = KernelOptions { with_sampling: true, ..spec };
+    let up = upload(&mut r, &showcase, spec)?;
+    let (w, h) = up.size();
+    out.sampling = interleave(
+        &mut r,
+        "showcase with and without the sampling code",
+        ("with sampling code", &up, sampling),
+        ("without (specialised)", &up, spec),
         (w, h),
         reps,
     )?;

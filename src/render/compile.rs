@@ -192,7 +192,11 @@ impl Assembled {
         for (name, on) in override_values(features) {
             // The general kernel compiles in every scene feature; pixel
             // jitter is a render setting (it changes the image), not one.
-            let on = on || (!kernel.specialise && name != "PIXEL_JITTER");
+            // AOVs are an output setting too (and need their buffer).
+            let setting = name == "PIXEL_JITTER" || name == "HAS_AOV";
+            let on = on
+                || (!kernel.specialise && !setting)
+                || (kernel.with_sampling && name == "HAS_AREA_LIGHTS");
             constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
         }
         let bvh = kernel.accel == Accel::Bvh;
@@ -316,6 +320,9 @@ pub struct KernelOptions {
     /// general kernel with every feature override on (false: the baseline
     /// the benchmark measures specialisation against).
     pub specialise: bool,
+    /// Compile the area-light sampling code in even when the scene has no
+    /// area light (the baseline the benchmark measures its cost against).
+    pub with_sampling: bool,
 }
 
 impl Default for KernelOptions {
@@ -326,6 +333,7 @@ impl Default for KernelOptions {
             shadow_offset: ShadowOffset::default(),
             sampler: Sampler::default(),
             specialise: true,
+            with_sampling: false,
         }
     }
 }

@@ -28,7 +28,7 @@ const BOX_MISS: f32 = 3.4e38;
 const BVH_STACK: usize = 64;
 const OFFSET_ORIGIN: f32 = 1.0 / 32.0;
 const OFFSET_FLOAT_SCALE: f32 = 1.0 / 65536.0;
-const OFFSET_INT_SCALE: f32 = 256.0;
+const OFFSET_INT_SCALE: f32 = 32.0;
 
 /// The data the CPU renderer reads: a laid-out scene with its BVH.
 pub struct CpuScene {
@@ -408,9 +408,7 @@ impl CpuScene {
 
     // shaders/shadows.wgsl (robust start, directional lights: t_max = FAR).
     fn occluded(&self, hit: &Hit, to_light: Vec3, distance: f32, steps: &mut Steps) -> bool {
-        if to_light.dot(hit.geometric_normal) <= 0.0 {
-            return true;
-        }
+        // (shade() only asks for lights above the geometric surface.)
         let origin = if hit.kind == Kind::Triangle {
             offset_ray_origin(hit.position, hit.geometric_normal)
         } else {
@@ -444,7 +442,9 @@ impl CpuScene {
             let l = -v3(light.direction);
             let (distance, falloff) = (FAR, 1.0f32);
             let ln = l.dot(n);
-            if ln <= 0.0 {
+            // Light below the geometric surface (interpolated normals): the
+            // surface itself is in the way, no ray needed.
+            if ln <= 0.0 || l.dot(hit.geometric_normal) <= 0.0 {
                 continue;
             }
             *shadow_rays += 1;
@@ -492,7 +492,7 @@ fn box_entry(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
     let near = t0.min(t1);
     let far = t0.max(t1);
     let t_enter = near.x.max(near.y).max(near.z.max(0.0));
-    let t_exit = far.x.min(far.y).min(far.z) * 1.000_000_4;
+    let t_exit = far.x.min(far.y).min(far.z) * 1.000_000_5;
     if t_enter <= t_exit.min(t_max) {
         t_enter
     } else {

@@ -474,6 +474,17 @@ pub fn markdown(r: &Results) -> String {
         "\nGeneral / specialised per frame (per interleaved pair): **{}**.\n",
         ratio(&sp.frames.ratio)
     );
+    if !sp.sampling.ratio.samples.is_empty() {
+        let _ = writeln!(
+            o,
+            "The sampling overhead: scenes/showcase.json ({}×{}, no area light, 1 spp) with the area-light sampling code compiled in (`KernelOptions {{ with_sampling: true }}`) against the default kernel, which leaves it out: {} against {} ms/frame; with / without per interleaved pair: **{}**.\n",
+            sp.sampling.width,
+            sp.sampling.height,
+            st(&sp.sampling.a_ms),
+            st(&sp.sampling.b_ms),
+            ratio(&sp.sampling.ratio)
+        );
+    }
 
     // ------------------------------------------------------------ 5
     let _ = writeln!(o, "## 5. Lavapipe's knobs\n");
