@@ -693,7 +693,10 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
     // The cost of the sampling code for a scene that does not need it.
     let path = root().join("scenes/showcase.json");
     let showcase = penumbra::loaders::load_scene(&path, &Default::default())?.scene;
-    let sampling = KernelOptions { with_sampling: true, ..spec };
+    let sampling = KernelOptions {
+        with_sampling: true,
+        ..spec
+    };
     let up = upload(&mut r, &showcase, spec)?;
     let (w, h) = up.size();
     out.sampling = interleave(
