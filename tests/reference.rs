@@ -65,21 +65,6 @@ fn load_sized(name: &str, width: u32, height: u32) -> Scene {
     .scene
 }
 
-/// Renders on the GPU with `kernel` and `sampling`, holding the shared
-/// renderer's lock for the whole step (the kernel is switched back after).
-fn gpu(scene: &Scene, kernel: KernelOptions, sampling: Sampling) -> Frame {
-    scene.validate().expect("valid");
-    let mut r = support::renderer();
-    let before = r.kernel();
-    r.set_kernel(kernel);
-    let result = r.upload(scene).and_then(|up| {
-        let (w, h) = up.size();
-        r.render_progressive(&up, w, h, &sampling, &mut |_| {})
-    });
-    r.set_kernel(before);
-    result.expect("render")
-}
-
 /// How two images compare.
 #[derive(Debug)]
 struct Agreement {
@@ -119,7 +104,7 @@ fn gpu_vs_reference(
     kernel: KernelOptions,
     sampling: Sampling,
 ) -> (Frame, Frame) {
-    let g = gpu(scene, kernel, sampling);
+    let g = support::render_with(scene, kernel, sampling);
     let r = penumbra::reference::render(scene, &sampling, &kernel);
     let a = compare(&g.image, &r.image);
     eprintln!(
@@ -286,36 +271,12 @@ fn bunny_matches_the_gpu() {
 /// blocked from the light. This checks the reference without our GPU.
 #[test]
 fn bunny_counts_match_embree() {
-    let mut scene = support::load(&scene_path("bunny_scene.glb"));
-    assert_eq!((scene.camera.width, scene.camera.height), (1024, 1024));
-    // Ambient terms that tell the meshes apart: with the light's ambient 0.1,
-    // an unlit ground pixel is exactly 0.05, an unlit bunny pixel exactly 0.1.
-    scene.lights[0].ambient = Vec3::splat(0.1);
-    let phong = |ka: f32| {
-        Shader::Phong(Phong {
-            ambient: Vec3::splat(ka),
-            diffuse: Vec3::splat(0.8),
-            specular: Vec3::ZERO,
-            shininess: 1.0,
-        })
-    };
-    scene.shaders = vec![phong(0.5), phong(1.0)];
-    for o in &mut scene.objects {
-        let Shape::Mesh(m) = &o.shape else {
-            panic!("the scene has meshes only")
-        };
-        o.shader = if m.indices.len() == 2 { 0 } else { 1 };
-    }
+    let scene = support::tagged_bunny_scene();
     let frame =
         penumbra::reference::render(&scene, &Sampling::default(), &KernelOptions::default());
     assert_eq!(frame.stats.primary_rays, 1024 * 1024);
     let px = &frame.image.pixels;
-    let count = |f: &dyn Fn(f32) -> bool| px.iter().filter(|p| p[3] == 1.0 && f(p[0])).count();
-    // The ground is lit at cos = 2/3.
-    let ground_lit = 0.05 + 0.8 * 2.0 / 3.0;
-    let bunny = count(&|r| r == 0.1 || (r > 0.1 && (r - ground_lit).abs() > 1e-5));
-    let ground = count(&|r| r == 0.05 || (r - ground_lit).abs() <= 1e-5);
-    let ground_dark = count(&|r| r == 0.05);
+    let [bunny, ground, _, ground_dark] = support::bunny_counts(&frame.image);
     eprintln!(
         "reference 1024²: bunny {bunny}, ground {ground}, blocked ground {ground_dark}, {:.2} s",
         frame.stats.timings.render.as_secs_f64()

@@ -87,23 +87,6 @@ fn form_factor(p: DVec3, n: DVec3, polygon: &[DVec3]) -> f64 {
     (sum / (2.0 * PI)).abs()
 }
 
-fn render_with(
-    scene: &Scene,
-    kernel: KernelOptions,
-    sampling: Sampling,
-) -> penumbra::render::Frame {
-    scene.validate().expect("valid");
-    let mut r = support::renderer();
-    let before = r.kernel();
-    r.set_kernel(kernel);
-    let result = r.upload(scene).and_then(|up| {
-        let (w, h) = up.size();
-        r.render_progressive(&up, w, h, &sampling, &mut |_| {})
-    });
-    r.set_kernel(before);
-    result.expect("render")
-}
-
 /// RMS relative error over the image against π·F/A (unit light over a
 /// white Lambert plane: N point lights of 1/N weighted by the emitter cosine
 /// converge to (1/A)∫cosθₑcosθᵣ/r² dA = πF/A).
@@ -116,7 +99,7 @@ fn convergence_error(samples: u32, sampler: Sampler) -> f64 {
         sampler,
         ..Default::default()
     };
-    let frame = render_with(&scene, kernel, Sampling::default());
+    let frame = support::render_with(&scene, kernel, Sampling::default());
     let polygon = [corner, corner + e1, corner + e1 + e2, corner + e2];
     let mut sq = 0.0;
     for j in 0..px {
@@ -218,8 +201,8 @@ fn penumbra_rises_monotonically_and_has_the_geometric_width() {
         spp: 4,
         ..Default::default()
     };
-    let shadowed = render_with(&penumbra_scene(true), KernelOptions::default(), sampling);
-    let free = render_with(&penumbra_scene(false), KernelOptions::default(), sampling);
+    let shadowed = support::render_with(&penumbra_scene(true), KernelOptions::default(), sampling);
+    let free = support::render_with(&penumbra_scene(false), KernelOptions::default(), sampling);
     let row = 100; // z ≈ 0
     let v: Vec<f64> = (0..200)
         .map(|i| shadowed.image.at(i, row)[0] as f64)
@@ -268,9 +251,9 @@ fn same_seed_same_image_other_seed_other_image() {
         seed,
         time_budget: None,
     };
-    let a = render_with(&scene, KernelOptions::default(), s(0));
-    let b = render_with(&scene, KernelOptions::default(), s(0));
-    let c = render_with(&scene, KernelOptions::default(), s(1));
+    let a = support::render_with(&scene, KernelOptions::default(), s(0));
+    let b = support::render_with(&scene, KernelOptions::default(), s(0));
+    let c = support::render_with(&scene, KernelOptions::default(), s(1));
     let bits = |f: &penumbra::render::Frame| {
         f.image
             .pixels
@@ -295,7 +278,7 @@ fn time_budget_stops_after_the_pass_in_flight() {
         seed: 0,
         time_budget: Some(std::time::Duration::from_millis(1)),
     };
-    let frame = render_with(&scene, KernelOptions::default(), sampling);
+    let frame = support::render_with(&scene, KernelOptions::default(), sampling);
     assert!(
         frame.stats.passes >= 1 && frame.stats.passes < 10_000,
         "{} passes",
@@ -318,11 +301,11 @@ fn spp_one_is_the_pixel_centre_image() {
     scene.camera.width = 120;
     scene.camera.height = 68;
     assert!(!scene.features().area_lights);
-    let one = render_with(&scene, KernelOptions::default(), Sampling::default());
+    let one = support::render_with(&scene, KernelOptions::default(), Sampling::default());
     let plain = support::render(&scene);
     assert_eq!(one.image, plain.image);
     // Several samples per pixel average sub-pixel positions: edges change.
-    let four = render_with(
+    let four = support::render_with(
         &scene,
         KernelOptions::default(),
         Sampling {
@@ -352,7 +335,7 @@ fn sphere_light_far_away_acts_like_a_point_light() {
             specular: Vec3::ZERO,
         }],
     );
-    let sphere = render_with(&scene, KernelOptions::default(), Sampling::default());
+    let sphere = support::render_with(&scene, KernelOptions::default(), Sampling::default());
     scene.lights[0].kind = LightKind::Point {
         position: DVec3::new(0.3, 3.0, -0.2),
     };

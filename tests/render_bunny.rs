@@ -6,9 +6,7 @@
 
 mod support;
 
-use glam::Vec3;
 use penumbra::render::{Accel, KernelOptions, ShadowOffset, TriangleTest};
-use penumbra::scene::{Phong, Shader, Shape};
 
 fn scene_path() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny_scene.glb")
@@ -19,42 +17,13 @@ fn scene_path() -> std::path::PathBuf {
 /// ambient 0.1, an unlit ground pixel is exactly 0.05 and an unlit bunny pixel
 /// exactly 0.1, and lit pixels are brighter.
 fn counts(offset: ShadowOffset) -> [usize; 4] {
-    let mut scene = support::load(&scene_path());
-    assert_eq!((scene.camera.width, scene.camera.height), (1024, 1024));
-    scene.lights[0].ambient = Vec3::splat(0.1);
-    let phong = |ka: f32| {
-        Shader::Phong(Phong {
-            ambient: Vec3::splat(ka),
-            diffuse: Vec3::splat(0.8),
-            specular: Vec3::ZERO,
-            shininess: 1.0,
-        })
-    };
-    scene.shaders = vec![phong(0.5), phong(1.0)];
-    for o in &mut scene.objects {
-        let Shape::Mesh(m) = &o.shape else {
-            panic!("the scene has meshes only")
-        };
-        o.shader = if m.indices.len() == 2 { 0 } else { 1 };
-    }
-    let mut r = support::renderer();
-    let before = r.kernel();
-    r.set_kernel(KernelOptions {
+    let kernel = KernelOptions {
         shadow_offset: offset,
-        ..before
-    });
-    let frame = r.render(&scene).expect("render");
-    r.set_kernel(before);
+        ..Default::default()
+    };
+    let frame = support::render_with(&support::tagged_bunny_scene(), kernel, Default::default());
     assert_eq!(frame.stats.primary_rays, 1024 * 1024);
-    let px = &frame.image.pixels;
-    let count = |f: &dyn Fn(f32) -> bool| px.iter().filter(|p| p[3] == 1.0 && f(p[0])).count();
-    let ground_lit = 0.05 + 0.8 * 2.0 / 3.0;
-    [
-        count(&|r| r == 0.1 || (r > 0.1 && (r - ground_lit).abs() > 1e-5)),
-        count(&|r| r == 0.05 || (r - ground_lit).abs() <= 1e-5),
-        count(&|r| r == 0.1),
-        count(&|r| r == 0.05),
-    ]
+    support::bunny_counts(&frame.image)
 }
 
 #[test]

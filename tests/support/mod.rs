@@ -66,3 +66,66 @@ pub fn assert_rgb(got: [f32; 4], want: [f64; 3], tol: f64) {
         );
     }
 }
+
+/// Renders on the GPU with `kernel` and `sampling`, holding the shared
+/// renderer's lock for the whole step (the kernel is switched back after).
+pub fn render_with(
+    scene: &Scene,
+    kernel: penumbra::render::KernelOptions,
+    sampling: penumbra::render::Sampling,
+) -> Frame {
+    scene.validate().expect("test scene is valid");
+    let mut r = renderer();
+    let before = r.kernel();
+    r.set_kernel(kernel);
+    let result = r.upload(scene).and_then(|up| {
+        let (w, h) = up.size();
+        r.render_progressive(&up, w, h, &sampling, &mut |_| {})
+    });
+    r.set_kernel(before);
+    result.expect("render")
+}
+
+/// The benchmark scene (`scenes/bunny_scene.glb`, 1024×1024) with ambient
+/// terms that tell its two meshes apart, for comparing with Embree's counts:
+/// with the light's ambient 0.1, an unlit ground pixel is exactly 0.05 and an
+/// unlit bunny pixel exactly 0.1, and lit pixels are brighter.
+pub fn tagged_bunny_scene() -> Scene {
+    use glam::Vec3;
+    use penumbra::scene::{Phong, Shader, Shape};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny_scene.glb");
+    let mut scene = load(&path);
+    assert_eq!((scene.camera.width, scene.camera.height), (1024, 1024));
+    scene.lights[0].ambient = Vec3::splat(0.1);
+    let phong = |ka: f32| {
+        Shader::Phong(Phong {
+            ambient: Vec3::splat(ka),
+            diffuse: Vec3::splat(0.8),
+            specular: Vec3::ZERO,
+            shininess: 1.0,
+        })
+    };
+    scene.shaders = vec![phong(0.5), phong(1.0)];
+    for o in &mut scene.objects {
+        let Shape::Mesh(m) = &o.shape else {
+            panic!("the scene has meshes only")
+        };
+        o.shader = if m.indices.len() == 2 { 0 } else { 1 };
+    }
+    scene
+}
+
+/// (bunny hits, ground hits, unlit bunny pixels, unlit ground pixels) of a
+/// render of [`tagged_bunny_scene`]. The ground is lit at cos = 2/3; bunny
+/// points lit at exactly that cosine are too few to matter.
+pub fn bunny_counts(image: &penumbra::render::Image) -> [usize; 4] {
+    let px = &image.pixels;
+    let count = |f: &dyn Fn(f32) -> bool| px.iter().filter(|p| p[3] == 1.0 && f(p[0])).count();
+    let ground_lit = 0.05 + 0.8 * 2.0 / 3.0;
+    [
+        count(&|r| r == 0.1 || (r > 0.1 && (r - ground_lit).abs() > 1e-5)),
+        count(&|r| r == 0.05 || (r - ground_lit).abs() <= 1e-5),
+        count(&|r| r == 0.1),
+        count(&|r| r == 0.05),
+    ]
+}
