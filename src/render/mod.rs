@@ -25,6 +25,9 @@ pub use trace::{HitKind, TraceHit, TraceRay};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
 const TILE: u32 = 8;
+/// Rows per dispatch of [`Renderer::render_cancellable`] (a multiple of
+/// `TILE`, so bands never overlap).
+const BAND_ROWS: u32 = 8 * TILE;
 
 /// Binding types of set 0, in binding order (see `shaders/`).
 const BINDINGS: [BindingType; 14] = [
@@ -664,6 +667,73 @@ impl Renderer {
             },
             aovs,
         ))
+    }
+
+    /// Renders an uploaded scene at `width`×`height` (one sample per pixel)
+    /// in bands of rows, asking `cancel` between bands; returns `None` as
+    /// soon as it says so. Hot reload uses it so that a newer edit stops the
+    /// refinement in flight.
+    pub fn render_cancellable(
+        &mut self,
+        scene: &UploadedScene,
+        width: u32,
+        height: u32,
+        cancel: &mut dyn FnMut() -> bool,
+    ) -> Result<Option<Frame>, RenderError> {
+        // Compile (and check the size) through the ordinary path on a 1×1
+        // image first: cheap, and the kernel is then cached.
+        let first = self.render_uploaded(scene, 1, 1)?;
+        let features = scene.features;
+        let kernel = KernelOptions {
+            accel: scene.kernel.accel,
+            ..self.kernel
+        };
+        if width > scene.width || height > scene.height || width == 0 || height == 0 {
+            return self.render_uploaded(scene, width, height).map(Some);
+        }
+        let ctx = &self.context;
+        let pipeline = &self.pipelines[&(features, kernel)];
+        let refs: Vec<_> = scene.buffers.iter().collect();
+        let counters = |ctx: &Context| -> Result<[u32; 2], RenderError> {
+            let b = ctx.read_buffer(&scene.buffers[8])?;
+            Ok([0, 1]
+                .map(|i| u32::from_le_bytes([b[i * 4], b[i * 4 + 1], b[i * 4 + 2], b[i * 4 + 3]])))
+        };
+        let before = counters(ctx)?;
+        let mut render = Duration::ZERO;
+        for y0 in (0..height).step_by(BAND_ROWS as usize) {
+            if cancel() {
+                return Ok(None);
+            }
+            let push = PushConstants {
+                origin: [0, y0],
+                size: [width, height],
+                ..Zeroable::zeroed()
+            };
+            let rows = BAND_ROWS.min(height - y0);
+            let groups = [width.div_ceil(TILE), rows.div_ceil(TILE), 1];
+            render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+        }
+        let t1 = Instant::now();
+        let after = counters(ctx)?;
+        let bytes = ctx.read_buffer(&scene.buffers[7])?;
+        let n = width as usize * height as usize;
+        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
+        let readback = t1.elapsed();
+        ctx.check_validation()?;
+        let mut stats = first.stats;
+        stats.primary_rays = after[0].wrapping_sub(before[0]) as u64;
+        stats.shadow_rays = after[1].wrapping_sub(before[1]) as u64;
+        stats.timings.render = render;
+        stats.timings.readback = readback;
+        Ok(Some(Frame {
+            image: Image {
+                width,
+                height,
+                pixels,
+            },
+            stats,
+        }))
     }
 
     /// Renders one frame of a validated scene: [`Renderer::upload`] then

@@ -12,9 +12,11 @@
 //! With a server address, the latest image, error and timing line are also
 //! published to a live page ([`server`]).
 //!
-//! Cancellation is per stage: a change that arrives while the preview
-//! renders skips the full-resolution stage; a stage already running is not
-//! interrupted.
+//! Cancellation: a change that arrives while the preview renders skips the
+//! full-resolution stage, and one that arrives during the full-resolution
+//! stage stops it between two bands of 64 rows
+//! ([`crate::render::Renderer::render_cancellable`]); the preview itself
+//! always completes.
 
 pub mod files;
 pub mod server;

@@ -161,8 +161,9 @@ impl Session {
 
     /// Renders the stages, largest divisor first (e.g. `[4, 1]`: a quarter
     /// resolution preview, then the full image), handing each to `write`.
-    /// Before each stage after the first, `cancel()` is asked whether a
-    /// newer edit arrived; then the rest is skipped and `Ok(true)` returned.
+    /// Before each stage after the first, and between the bands of rows of
+    /// those stages, `cancel()` is asked whether a newer edit arrived; then
+    /// the rest is skipped and `Ok(true)` returned.
     pub fn render_stages(
         &mut self,
         divisors: &[u32],
@@ -181,8 +182,16 @@ impl Session {
                 return Ok(true);
             }
             let (sw, sh) = ((w / d).max(1), (h / d).max(1));
-            match self.renderer.render_uploaded(up, sw, sh) {
-                Ok(frame) => {
+            // The first stage (the preview) always completes; later ones stop
+            // between bands of rows as soon as a newer edit arrives.
+            let result = if i == 0 {
+                self.renderer.render_uploaded(up, sw, sh).map(Some)
+            } else {
+                self.renderer.render_cancellable(up, sw, sh, &mut cancel)
+            };
+            match result {
+                Ok(None) => return Ok(true),
+                Ok(Some(frame)) => {
                     let t = frame.stats.timings;
                     let c = CompileTimes {
                         naga: t.shader_compile,
