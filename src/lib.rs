@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! penumbra: a headless ray tracer whose rendering runs entirely in Vulkan
 //! compute shaders — on Mesa's CPU driver lavapipe by default, and on any
 //! Vulkan 1.1 GPU when there is one.

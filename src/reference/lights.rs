@@ -13,7 +13,9 @@ use glam::DVec3;
 use super::intersect::FAR;
 use crate::scene::{Light as SceneLight, LightKind};
 
-/// Where a light's samples come from.
+/// Where a light's samples come from. (Each variant's docs name its
+/// fields.)
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug)]
 pub enum Kind {
     /// Parallel light travelling along the unit `direction`.

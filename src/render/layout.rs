@@ -10,6 +10,11 @@
 //! precision then depends on the distance from the eye, not from the world
 //! origin.
 
+// The fields mirror the WGSL struct named in each struct's documentation,
+// member by member (the test at the bottom checks them); they need no docs
+// of their own.
+#![allow(missing_docs)]
+
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
