@@ -224,6 +224,12 @@ pub struct SpecialisePart {
     /// compiled in, B = left out (the default).
     #[serde(default)]
     pub sampling: Pair,
+    /// Specialised by constants written into the WGSL text.
+    #[serde(default)]
+    pub text: KernelCompile,
+    /// A = specialised by WGSL text, B = by overrides.
+    #[serde(default)]
+    pub text_frames: Pair,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
@@ -650,6 +656,10 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
         specialise: false,
         ..spec
     };
+    let text = KernelOptions {
+        text_specialise: true,
+        ..spec
+    };
     let src = penumbra::render::ShaderSource::Embedded.assemble()?;
     let features = bunny.features();
     let mut out = SpecialisePart {
@@ -661,19 +671,23 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
             spirv_bytes: src.compile(&features, &general)?.len() * 4,
             ..Default::default()
         },
+        text: KernelCompile {
+            spirv_bytes: src.compile(&features, &text)?.len() * 4,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let up = upload(&mut r, &bunny, spec)?;
     let (w, h) = up.size();
     // Two rounds of cold compiles (the driver's cache is disabled by the
     // parent), the order swapped in the second.
-    for order in [[true, false], [false, true]] {
+    for order in [[0, 1, 2], [2, 1, 0]] {
         r.clear_pipeline_cache();
-        for specialised in order {
-            let (k, c) = if specialised {
-                (spec, &mut out.specialised)
-            } else {
-                (general, &mut out.general)
+        for which in order {
+            let (k, c) = match which {
+                0 => (spec, &mut out.specialised),
+                1 => (general, &mut out.general),
+                _ => (text, &mut out.text),
             };
             let t = frame(&mut r, &up, k, 8, 8)?.stats.timings;
             c.naga_ms.push(ms(t.shader_compile));
@@ -687,6 +701,14 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
         "general vs specialised kernel",
         ("general", &up, general),
         ("specialised", &up, spec),
+        (w, h),
+        reps,
+    )?;
+    out.text_frames = interleave(
+        &mut r,
+        "specialised by WGSL text vs by overrides",
+        ("text", &up, text),
+        ("overrides", &up, spec),
         (w, h),
         reps,
     )?;

@@ -183,21 +183,43 @@ impl Assembled {
         entry: &str,
     ) -> Result<Vec<u32>, CompileError> {
         use naga::valid::{Capabilities, ValidationFlags, Validator};
-        let module = self.parse()?;
+        // The feature values, for overrides or (text specialisation) consts.
+        let values: Vec<(&str, bool)> = override_values(features)
+            .into_iter()
+            .map(|(name, on)| {
+                // The general kernel compiles in every scene feature; pixel
+                // jitter is a render setting (it changes the image), not one.
+                // AOVs are an output setting too (and need their buffer).
+                let setting = name == "PIXEL_JITTER" || name == "HAS_AOV";
+                let on = on
+                    || (!kernel.specialise && !setting)
+                    || (kernel.with_sampling && name == "HAS_AREA_LIGHTS");
+                (name, on)
+            })
+            .collect();
+        let module = if kernel.text_specialise {
+            // The alternative to overrides: write the values into the WGSL
+            // text as plain constants before naga sees it.
+            let mut text = self.clone();
+            for (name, on) in &values {
+                text.text = text.text.replace(
+                    &format!("override {name}: bool = true;"),
+                    &format!("const {name}: bool = {on};"),
+                );
+            }
+            text.parse()?
+        } else {
+            self.parse()?
+        };
         let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
         let info = validator
             .validate(&module)
             .map_err(|e| self.error_at(e.location(&self.text), format!("{}", e.as_inner())))?;
         let mut constants = naga::back::PipelineConstants::default();
-        for (name, on) in override_values(features) {
-            // The general kernel compiles in every scene feature; pixel
-            // jitter is a render setting (it changes the image), not one.
-            // AOVs are an output setting too (and need their buffer).
-            let setting = name == "PIXEL_JITTER" || name == "HAS_AOV";
-            let on = on
-                || (!kernel.specialise && !setting)
-                || (kernel.with_sampling && name == "HAS_AREA_LIGHTS");
-            constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
+        if !kernel.text_specialise {
+            for (name, on) in values {
+                constants.insert(name.to_string(), if on { 1.0 } else { 0.0 });
+            }
         }
         let bvh = kernel.accel == Accel::Bvh;
         constants.insert("USE_BVH".into(), if bvh { 1.0 } else { 0.0 });
@@ -323,6 +345,10 @@ pub struct KernelOptions {
     /// Compile the area-light sampling code in even when the scene has no
     /// area light (the baseline the benchmark measures its cost against).
     pub with_sampling: bool,
+    /// Specialise by writing the feature values into the WGSL text as
+    /// `const`s instead of resolving `override`s (the benchmark compares the
+    /// two).
+    pub text_specialise: bool,
 }
 
 impl Default for KernelOptions {
@@ -334,6 +360,7 @@ impl Default for KernelOptions {
             sampler: Sampler::default(),
             specialise: true,
             with_sampling: false,
+            text_specialise: false,
         }
     }
 }
@@ -447,6 +474,33 @@ mod tests {
                 src.compile(&Features::default(), &kernel).unwrap();
             }
         }
+    }
+
+    #[test]
+    fn text_specialisation_compiles_and_matches_the_override_kernel_size() {
+        let src = ShaderSource::Embedded.assemble().unwrap();
+        let f = Features {
+            triangles: true,
+            directional_lights: true,
+            phong: true,
+            ..Default::default()
+        };
+        let overrides = src.compile(&f, &KernelOptions::default()).unwrap();
+        let text = KernelOptions {
+            text_specialise: true,
+            ..Default::default()
+        };
+        let text = src.compile(&f, &text).unwrap();
+        assert_eq!(text[0], 0x0723_0203);
+        // naga keeps constant-condition branches either way: the dead code is
+        // left to the driver's compiler (docs/bench.md measures the result).
+        let ratio = text.len() as f64 / overrides.len() as f64;
+        assert!(
+            (0.8..1.2).contains(&ratio),
+            "{} vs {}",
+            text.len(),
+            overrides.len()
+        );
     }
 
     #[test]
