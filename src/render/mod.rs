@@ -516,9 +516,8 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
-        Ok(self
-            .render_passes(scene, width, height, sampling, on_pass, false)?
-            .0)
+        let done = self.render_passes(scene, width, height, sampling, on_pass, false, None)?;
+        Ok(done.unwrap_or_else(|| unreachable!("not cancellable")).0)
     }
 
     /// [`Renderer::render_progressive`] that also returns the arbitrary
@@ -531,10 +530,16 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<(Frame, Aovs), RenderError> {
-        let (frame, aovs) = self.render_passes(scene, width, height, sampling, on_pass, true)?;
+        let done = self.render_passes(scene, width, height, sampling, on_pass, true, None)?;
+        let (frame, aovs) = done.unwrap_or_else(|| unreachable!("not cancellable"));
         Ok((frame, aovs.unwrap_or_default()))
     }
 
+    /// The passes behind every render. With `cancel`, each pass is
+    /// dispatched in bands of [`BAND_ROWS`] rows and `cancel` is asked before
+    /// each band (`Ok(None)` once it says yes); without, a pass is one
+    /// dispatch (the fast path).
+    #[allow(clippy::too_many_arguments)]
     fn render_passes(
         &mut self,
         scene: &UploadedScene,
@@ -543,7 +548,8 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
         with_aovs: bool,
-    ) -> Result<(Frame, Option<Aovs>), RenderError> {
+        mut cancel: Option<&mut dyn FnMut() -> bool>,
+    ) -> Result<Option<(Frame, Option<Aovs>)>, RenderError> {
         if width == 0 || height == 0 || width > scene.width || height > scene.height {
             return Err(RenderError::Scene {
                 field: "camera.width/camera.height".into(),
@@ -606,7 +612,26 @@ impl Renderer {
                 seed: sampling.seed,
                 ..Zeroable::zeroed()
             };
-            render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+            match cancel.as_mut() {
+                None => {
+                    render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?
+                }
+                Some(cancel) => {
+                    for y0 in (0..height).step_by(BAND_ROWS as usize) {
+                        if cancel() {
+                            return Ok(None);
+                        }
+                        let band = PushConstants {
+                            origin: [0, y0],
+                            ..push
+                        };
+                        let rows = BAND_ROWS.min(height - y0);
+                        let groups = [groups[0], rows.div_ceil(TILE), 1];
+                        render +=
+                            ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&band), groups)?;
+                    }
+                }
+            }
             let after = read_counters()?;
             primary_rays += after[0].wrapping_sub(before[0]) as u64;
             shadow_rays += after[1].wrapping_sub(before[1]) as u64;
@@ -640,7 +665,7 @@ impl Renderer {
         let readback = t1.elapsed();
         ctx.check_validation()?;
 
-        Ok((
+        Ok(Some((
             Frame {
                 image: Image {
                     width,
@@ -666,7 +691,7 @@ impl Renderer {
                 },
             },
             aovs,
-        ))
+        )))
     }
 
     /// Renders an uploaded scene at `width`×`height` (one sample per pixel)
@@ -680,60 +705,17 @@ impl Renderer {
         height: u32,
         cancel: &mut dyn FnMut() -> bool,
     ) -> Result<Option<Frame>, RenderError> {
-        // Compile (and check the size) through the ordinary path on a 1×1
-        // image first: cheap, and the kernel is then cached.
-        let first = self.render_uploaded(scene, 1, 1)?;
-        let features = scene.features;
-        let kernel = KernelOptions {
-            accel: scene.kernel.accel,
-            ..self.kernel
-        };
-        if width > scene.width || height > scene.height || width == 0 || height == 0 {
-            return self.render_uploaded(scene, width, height).map(Some);
-        }
-        let ctx = &self.context;
-        let pipeline = &self.pipelines[&(features, kernel)];
-        let refs: Vec<_> = scene.buffers.iter().collect();
-        let counters = |ctx: &Context| -> Result<[u32; 2], RenderError> {
-            let b = ctx.read_buffer(&scene.buffers[8])?;
-            Ok([0, 1]
-                .map(|i| u32::from_le_bytes([b[i * 4], b[i * 4 + 1], b[i * 4 + 2], b[i * 4 + 3]])))
-        };
-        let before = counters(ctx)?;
-        let mut render = Duration::ZERO;
-        for y0 in (0..height).step_by(BAND_ROWS as usize) {
-            if cancel() {
-                return Ok(None);
-            }
-            let push = PushConstants {
-                origin: [0, y0],
-                size: [width, height],
-                ..Zeroable::zeroed()
-            };
-            let rows = BAND_ROWS.min(height - y0);
-            let groups = [width.div_ceil(TILE), rows.div_ceil(TILE), 1];
-            render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
-        }
-        let t1 = Instant::now();
-        let after = counters(ctx)?;
-        let bytes = ctx.read_buffer(&scene.buffers[7])?;
-        let n = width as usize * height as usize;
-        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
-        let readback = t1.elapsed();
-        ctx.check_validation()?;
-        let mut stats = first.stats;
-        stats.primary_rays = after[0].wrapping_sub(before[0]) as u64;
-        stats.shadow_rays = after[1].wrapping_sub(before[1]) as u64;
-        stats.timings.render = render;
-        stats.timings.readback = readback;
-        Ok(Some(Frame {
-            image: Image {
-                width,
-                height,
-                pixels,
-            },
-            stats,
-        }))
+        let sampling = Sampling::default();
+        let done = self.render_passes(
+            scene,
+            width,
+            height,
+            &sampling,
+            &mut |_| {},
+            false,
+            Some(cancel),
+        )?;
+        Ok(done.map(|(frame, _)| frame))
     }
 
     /// Renders one frame of a validated scene: [`Renderer::upload`] then
