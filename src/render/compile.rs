@@ -211,10 +211,21 @@ impl Assembled {
         } else {
             self.parse()?
         };
-        let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
+        let mut validator = Validator::new(
+            ValidationFlags::all(),
+            Capabilities::IMMEDIATES | Capabilities::SUBGROUP,
+        );
+        // Subgroup sums for the ray counters; the Vulkan context only offers
+        // devices that support them in compute shaders.
+        validator
+            .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+            .subgroup_operations(
+                naga::valid::SubgroupOperationSet::BASIC
+                    | naga::valid::SubgroupOperationSet::ARITHMETIC,
+            );
         let info = validator
             .validate(&module)
-            .map_err(|e| self.error_at(e.location(&self.text), format!("{}", e.as_inner())))?;
+            .map_err(|e| self.error_at(e.location(&self.text), error_chain(e.as_inner())))?;
         let mut constants = naga::back::PipelineConstants::default();
         if !kernel.text_specialise {
             for (name, on) in values {
@@ -407,6 +418,20 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
         ("PIXEL_JITTER", f.pixel_jitter),
         ("HAS_AOV", f.aov),
     ]
+}
+
+/// An error and its causes, outermost first ("entry point render is
+/// invalid: …: the real reason"), so a shader author sees the reason and
+/// not only naga's outermost context.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
 }
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we

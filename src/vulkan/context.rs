@@ -157,7 +157,8 @@ impl InstanceHolder {
         Ok(holder)
     }
 
-    /// Usable devices (Vulkan >= 1.1 with a compute queue) in enumeration order.
+    /// Usable devices (Vulkan >= 1.1 with a compute queue and subgroup
+    /// arithmetic in compute shaders) in enumeration order.
     fn devices(&self) -> Result<Vec<PhysicalDevice>, VulkanError> {
         // SAFETY: valid instance.
         let all = unsafe { self.instance.enumerate_physical_devices() }
@@ -198,11 +199,23 @@ impl InstanceHolder {
         };
         let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut maintenance3);
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut maintenance3)
+            .push_next(&mut subgroup);
         if has_driver_props {
             props2 = props2.push_next(&mut driver);
         }
         unsafe { instance.get_physical_device_properties2(handle, &mut props2) };
+        // The kernel sums its ray counters per subgroup (subgroupAdd):
+        // lavapipe and every desktop GPU have this; a device without it is
+        // not usable.
+        let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC;
+        if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            || !subgroup.supported_operations.contains(ops)
+        {
+            return Ok(None);
+        }
         let c_str = |r: Result<&CStr, _>| {
             r.map(|s: &CStr| s.to_string_lossy().into_owned())
                 .unwrap_or_default()

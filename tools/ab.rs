@@ -1,0 +1,113 @@
+//! A/B timing of two shader trees on one scene: is my edit faster?
+//!
+//! `cargo run --release --example ab -- SCENE --b my_shaders/` renders the
+//! scene with the built-in shaders (A, or `--a DIR`) and with `DIR` (B),
+//! interleaved A B A B … after a warm-up frame of each, and prints both
+//! medians and the median of the per-pair ratios B/A with its range. Pairs,
+//! not two separate runs, because a 2-core machine's second core comes and
+//! goes for minutes at a time (see docs/bench.md).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use clap::Parser;
+
+use penumbra::loaders::{self, LoadOptions};
+use penumbra::render::{Renderer, RendererOptions, ShaderSource};
+use penumbra::vulkan::DeviceSelector;
+
+#[derive(Parser)]
+#[command(name = "ab", about = "Interleaved A/B frame times of two shader trees")]
+struct Args {
+    /// The scene (.json, .gltf or .glb).
+    scene: PathBuf,
+    /// Shader tree A (default: the shaders built into the binary).
+    #[arg(long)]
+    a: Option<PathBuf>,
+    /// Shader tree B.
+    #[arg(long)]
+    b: PathBuf,
+    /// Measured pairs.
+    #[arg(long, default_value_t = 7)]
+    pairs: usize,
+    /// Vulkan device: an index from `penumbra devices`, or part of its name.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+fn median_min_max(v: &[f64]) -> (f64, f64, f64) {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    let median = if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        (s[n / 2 - 1] + s[n / 2]) / 2.0
+    };
+    (median, s[0], s[n - 1])
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    anyhow::ensure!(args.pairs > 0, "--pairs: must be at least 1");
+    let device = args
+        .device
+        .as_deref()
+        .map(|d| d.parse::<DeviceSelector>())
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
+    let scene = loaders::load_scene(&args.scene, &LoadOptions::default())?.scene;
+    let source = |d: &Option<PathBuf>| match d {
+        Some(p) => ShaderSource::Directory(p.clone()),
+        None => ShaderSource::Embedded,
+    };
+    let mut sides = Vec::new();
+    for (name, dir) in [("A", source(&args.a)), ("B", source(&Some(args.b.clone())))] {
+        let mut r = Renderer::new(&RendererOptions {
+            device: device.clone(),
+            shaders: dir,
+            ..Default::default()
+        })?;
+        let up = r.upload(&scene)?;
+        let (w, h) = up.size();
+        let t0 = Instant::now();
+        // Compile (first frame), then one warm-up frame.
+        r.render_uploaded(&up, w, h)
+            .with_context(|| format!("shader tree {name}"))?;
+        r.render_uploaded(&up, w, h)?;
+        eprintln!("{name}: compiled and warmed up in {:.0} ms", ms(t0.elapsed()));
+        sides.push((r, up));
+    }
+    let (mut ta, mut tb, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+    let mut rays = [0u64; 2];
+    for _ in 0..args.pairs {
+        let mut t = [0.0; 2];
+        for (i, (r, up)) in sides.iter_mut().enumerate() {
+            let (w, h) = up.size();
+            let f = r.render_uploaded(up, w, h)?;
+            t[i] = ms(f.stats.timings.render);
+            rays[i] = f.stats.rays();
+        }
+        ta.push(t[0]);
+        tb.push(t[1]);
+        ratio.push(t[1] / t[0]);
+    }
+    for (name, v, n) in [("A", &ta, rays[0]), ("B", &tb, rays[1])] {
+        let (m, lo, hi) = median_min_max(v);
+        println!(
+            "{name}: {m:.1} [{lo:.1}–{hi:.1}] ms/frame, {:.1} Mrays/s",
+            n as f64 / m / 1e3
+        );
+    }
+    let (m, lo, hi) = median_min_max(&ratio);
+    println!("B/A: {m:.3} [{lo:.3}–{hi:.3}] over {} pairs", args.pairs);
+    if rays[0] != rays[1] {
+        println!("note: the trees traced different ray counts ({} vs {})", rays[0], rays[1]);
+    }
+    Ok(())
+}
+
+fn ms(d: std::time::Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
