@@ -76,7 +76,10 @@ fn main() -> anyhow::Result<()> {
         r.render_uploaded(&up, w, h)
             .with_context(|| format!("shader tree {name}"))?;
         r.render_uploaded(&up, w, h)?;
-        eprintln!("{name}: compiled and warmed up in {:.0} ms", ms(t0.elapsed()));
+        eprintln!(
+            "{name}: compiled and warmed up in {:.0} ms",
+            ms(t0.elapsed())
+        );
         sides.push((r, up));
     }
     let (mut ta, mut tb, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
@@ -103,7 +106,10 @@ fn main() -> anyhow::Result<()> {
     let (m, lo, hi) = median_min_max(&ratio);
     println!("B/A: {m:.3} [{lo:.3}–{hi:.3}] over {} pairs", args.pairs);
     if rays[0] != rays[1] {
-        println!("note: the trees traced different ray counts ({} vs {})", rays[0], rays[1]);
+        println!(
+            "note: the trees traced different ray counts ({} vs {})",
+            rays[0], rays[1]
+        );
     }
     Ok(())
 }

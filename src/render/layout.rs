@@ -17,6 +17,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::bvh::{Aabb, Bvh};
 use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
@@ -417,24 +418,32 @@ impl GpuScene {
     /// by a few ulps so that no hit the intersection routines report can lie
     /// outside its box.
     pub fn build_bvh(&mut self) {
-        let v = |a: [f32; 3]| DVec3::from_array(a.map(f64::from));
-        let mut boxes: Vec<Aabb> = self
-            .triangles
+        // Triangle boxes straight from the f32 vertices (exact); sphere
+        // boxes computed in f64 and rounded outwards.
+        let spheres: Vec<([f32; 3], [f32; 3])> = self
+            .spheres
             .iter()
-            .map(|t| Aabb::of_points(&[v(t.v0), v(t.v1), v(t.v2)]))
+            .map(|s| {
+                let c = DVec3::from_array(s.center.map(f64::from));
+                let r = DVec3::splat(s.radius as f64);
+                outward_f32(Aabb {
+                    min: c - r,
+                    max: c + r,
+                })
+            })
             .collect();
-        boxes.extend(self.spheres.iter().map(|s| {
-            let r = DVec3::splat(s.radius as f64);
-            Aabb {
-                min: v(s.center) - r,
-                max: v(s.center) + r,
-            }
-        }));
-        let bvh = Bvh::build(&boxes);
+        let triangles = &self.triangles;
+        let bvh = Bvh::build_f32(triangles.len() + spheres.len(), |i| {
+            let Some(t) = triangles.get(i) else {
+                return spheres[i - triangles.len()];
+            };
+            let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+            (a.min(b).min(c).to_array(), a.max(b).max(c).to_array())
+        });
         self.bvh_prims = bvh.prim_refs(self.triangles.len());
         self.bvh_nodes = bvh
             .nodes
-            .iter()
+            .par_iter()
             .map(|n| {
                 let (min, max) = outward_f32(n.bounds);
                 BvhNode {

@@ -211,7 +211,9 @@ impl InstanceHolder {
         // lavapipe and every desktop GPU have this; a device without it is
         // not usable.
         let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC;
-        if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+        if !subgroup
+            .supported_stages
+            .contains(vk::ShaderStageFlags::COMPUTE)
             || !subgroup.supported_operations.contains(ops)
         {
             return Ok(None);
