@@ -55,26 +55,36 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
     var sp = 0u;
     var node_index = 0u;
     var node_t = box_entry(bvh_nodes[0], ray.origin, inv_dir, (*hit).t);
+    // "While-while" (Aila and Laine 2009): every lane descends to a leaf
+    // first, so the lanes of a SIMD group test their leaves together.
     loop {
-        if node_t < (*hit).t {
-            let node = bvh_nodes[node_index];
-            if node.count == 0u {
-                let left = node_index + 1u;
-                let right = node.index;
-                let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, (*hit).t);
-                let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, (*hit).t);
-                let left_first = tl <= tr;
-                let near_t = select(tr, tl, left_first);
-                let far_t = select(tl, tr, left_first);
-                if far_t < BOX_MISS {
-                    stack[sp] = select(left, right, left_first);
-                    stack_t[sp] = far_t;
-                    sp++;
-                }
-                node_index = select(right, left, left_first);
-                node_t = near_t;
-                continue;
+        var leaf = false;
+        loop {
+            if node_t >= (*hit).t {
+                break;
             }
+            let node = bvh_nodes[node_index];
+            if node.count != 0u {
+                leaf = true;
+                break;
+            }
+            let left = node_index + 1u;
+            let right = node.index;
+            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, (*hit).t);
+            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, (*hit).t);
+            let left_first = tl <= tr;
+            let near_t = select(tr, tl, left_first);
+            let far_t = select(tl, tr, left_first);
+            if far_t < BOX_MISS {
+                stack[sp] = select(left, right, left_first);
+                stack_t[sp] = far_t;
+                sp++;
+            }
+            node_index = select(right, left, left_first);
+            node_t = near_t;
+        }
+        if leaf {
+            let node = bvh_nodes[node_index];
             for (var i = node.index; i < node.index + node.count; i++) {
                 let prim = bvh_prims[i];
                 if (prim & PRIM_SPHERE) != 0u {
