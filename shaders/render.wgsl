@@ -108,9 +108,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         image[pixel] = value;
         primary = 1u;
     }
-    // One global atomic per subgroup instead of one per pixel. (A
-    // workgroup barrier would do per workgroup, but lavapipe then runs the
-    // kernel as coroutines: 15–18 % of the bunny frame, tools/ab.rs.)
+    // One global atomic per subgroup instead of one per pixel. (Summing
+    // per workgroup needs a barrier, and lavapipe then runs the whole kernel
+    // as coroutines: docs/bench.md §6 measures the difference.)
     let subgroup_primary = subgroupAdd(primary);
     let subgroup_shadow = subgroupAdd(shadow_rays);
     // The first active lane of the subgroup (naga has no subgroupElect).

@@ -104,6 +104,28 @@ impl Aabb {
     pub fn contains(&self, o: &Aabb) -> bool {
         self.min.cmple(o.min).all() && self.max.cmpge(o.max).all()
     }
+
+    /// The smallest `f32` box (lower and upper corner) that contains this
+    /// one: each coordinate rounded outwards.
+    pub fn outward_f32(&self) -> ([f32; 3], [f32; 3]) {
+        let down = |x: f64| {
+            let f = x as f32;
+            if f as f64 > x {
+                f.next_down()
+            } else {
+                f
+            }
+        };
+        let up = |x: f64| {
+            let f = x as f32;
+            if (f as f64) < x {
+                f.next_up()
+            } else {
+                f
+            }
+        };
+        (self.min.to_array().map(down), self.max.to_array().map(up))
+    }
 }
 
 /// One node of the flattened tree.
@@ -181,10 +203,7 @@ impl Bvh {
     pub fn build_f32(n: usize, bounds: impl Fn(usize) -> ([f32; 3], [f32; 3]) + Sync) -> Bvh {
         Self::build_with(n, |i| {
             let (min, max) = bounds(i);
-            Box32 {
-                min: Vec3A::from_array(min),
-                max: Vec3A::from_array(max),
-            }
+            Box32::new(min, max)
         })
     }
 
@@ -277,27 +296,16 @@ impl Box32 {
         max: Vec3A::NEG_INFINITY,
     };
 
-    fn outward(b: &Aabb) -> Box32 {
-        let down = |x: f64| {
-            let f = x as f32;
-            if f as f64 > x {
-                f.next_down()
-            } else {
-                f
-            }
-        };
-        let up = |x: f64| {
-            let f = x as f32;
-            if (f as f64) < x {
-                f.next_up()
-            } else {
-                f
-            }
-        };
+    fn new(min: [f32; 3], max: [f32; 3]) -> Box32 {
         Box32 {
-            min: Vec3A::new(down(b.min.x), down(b.min.y), down(b.min.z)),
-            max: Vec3A::new(up(b.max.x), up(b.max.y), up(b.max.z)),
+            min: Vec3A::from_array(min),
+            max: Vec3A::from_array(max),
         }
+    }
+
+    fn outward(b: &Aabb) -> Box32 {
+        let (min, max) = b.outward_f32();
+        Box32::new(min, max)
     }
 
     fn to_f64(self) -> Aabb {
@@ -532,8 +540,7 @@ fn split(order: &mut [Prim], bounds: &Box32, cb: &Box32) -> Option<(usize, Sides
     }
     // Partition in place (Hoare: swap only misplaced pairs), gathering both
     // sides' bounds on the way, so the children need no pass of their own.
-    let (min, s) = (cb.min[axis], scale[axis]);
-    let goes_left = |p: &Prim| bin_index(p.bounds().centre2()[axis], min, s, nb) < k;
+    let goes_left = |p: &Prim| (bins_of(p, cb.min, scale, nb)[axis] as usize) < k;
     let mut left = (Box32::EMPTY, Box32::EMPTY);
     let mut right = (Box32::EMPTY, Box32::EMPTY);
     let add = |side: &mut (Box32, Box32), p: &Prim| {
@@ -566,13 +573,9 @@ fn bin(order: &[Prim], cb: &Box32, scale: Vec3A, nb: usize) -> [[Bin; BINS]; 3] 
         bounds: Box32::EMPTY,
         count: 0,
     }; BINS]; 3];
-    let last = UVec3::splat(nb as u32 - 1);
     let add = |mut acc: [[Bin; BINS]; 3], chunk: &[Prim]| {
         for p in chunk {
-            // Saturating float-to-int casts: NaN and negatives go to bin 0.
-            let k = ((p.bounds().centre2() - cb.min) * scale)
-                .as_uvec3()
-                .min(last);
+            let k = bins_of(p, cb.min, scale, nb);
             for axis in 0..3 {
                 let bin = &mut acc[axis][k[axis] as usize];
                 bin.bounds = bin.bounds.union(p.bounds());
@@ -615,10 +618,14 @@ fn bounds_of(order: &[Prim]) -> (Box32, Box32) {
         .reduce(|| empty, |(a, b), (c, d)| (a.union(c), b.union(d)))
 }
 
-/// The bin (of `nb`) of a centre coordinate `x` (0 when the axis has no
-/// extent).
-fn bin_index(x: f32, min: f32, scale: f32, nb: usize) -> usize {
-    (((x - min) * scale) as usize).min(nb - 1)
+/// The bins (of `nb`, per axis) of a primitive's doubled centre; 0 on an
+/// axis without extent. Binning and partitioning both call this, so a
+/// primitive always goes to the side its bin was counted on. The
+/// float-to-int casts saturate: NaN and negatives go to bin 0.
+fn bins_of(p: &Prim, cb_min: Vec3A, scale: Vec3A, nb: usize) -> UVec3 {
+    ((p.bounds().centre2() - cb_min) * scale)
+        .as_uvec3()
+        .min(UVec3::splat(nb as u32 - 1))
 }
 
 #[cfg(test)]

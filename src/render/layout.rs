@@ -426,7 +426,7 @@ impl GpuScene {
             .map(|s| {
                 let c = DVec3::from_array(s.center.map(f64::from));
                 let r = DVec3::splat(s.radius as f64);
-                outward_f32(Aabb {
+                padded_outward_f32(Aabb {
                     min: c - r,
                     max: c + r,
                 })
@@ -445,7 +445,7 @@ impl GpuScene {
             .nodes
             .par_iter()
             .map(|n| {
-                let (min, max) = outward_f32(n.bounds);
+                let (min, max) = padded_outward_f32(n.bounds);
                 BvhNode {
                     min,
                     index: n.index,
@@ -462,25 +462,13 @@ impl GpuScene {
 /// A box in `f32`, rounded outwards and padded by 2⁻²⁰ of its largest
 /// coordinate magnitude (a few ulps), so it contains the `f64` box and the
 /// rounding error of the ray/primitive tests.
-fn outward_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
+fn padded_outward_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
     let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 20) as f64);
-    let down = |x: f64| {
-        let f = (x - pad) as f32;
-        if f as f64 > x - pad {
-            f.next_down()
-        } else {
-            f
-        }
-    };
-    let up = |x: f64| {
-        let f = (x + pad) as f32;
-        if (f as f64) < x + pad {
-            f.next_up()
-        } else {
-            f
-        }
-    };
-    (b.min.to_array().map(down), b.max.to_array().map(up))
+    Aabb {
+        min: b.min - pad,
+        max: b.max + pad,
+    }
+    .outward_f32()
 }
 
 /// The point of a plane nearest to `eye`: a far-away `point` on the plane
