@@ -34,6 +34,32 @@ struct Args {
     /// Vulkan device: an index from `penumbra devices`, or part of its name.
     #[arg(long)]
     device: Option<String>,
+    /// Compare the CPU time the driver's threads spend per frame (every
+    /// thread but the main one, from /proc/self/task/*/schedstat) instead of
+    /// wall time: time-sharing the cores with other processes inflates wall
+    /// time, not this. For lavapipe on Linux only.
+    #[arg(long)]
+    cpu_time: bool,
+}
+
+/// Nanoseconds on the CPU of every thread of this process but the main one
+/// (lavapipe's workers; the main thread only submits and waits).
+fn worker_cpu_ns() -> anyhow::Result<u64> {
+    let main = std::process::id().to_string();
+    let mut total = 0;
+    for task in std::fs::read_dir("/proc/self/task")? {
+        let task = task?;
+        if task.file_name().to_str() == Some(main.as_str()) {
+            continue;
+        }
+        // A thread that ended meanwhile has no schedstat any more.
+        let Ok(stat) = std::fs::read_to_string(task.path().join("schedstat")) else {
+            continue;
+        };
+        let on_cpu = stat.split_whitespace().next().unwrap_or("0");
+        total += on_cpu.parse::<u64>().context("schedstat")?;
+    }
+    Ok(total)
 }
 
 fn median_min_max(v: &[f64]) -> (f64, f64, f64) {
@@ -88,8 +114,13 @@ fn main() -> anyhow::Result<()> {
         let mut t = [0.0; 2];
         for (i, (r, up)) in sides.iter_mut().enumerate() {
             let (w, h) = up.size();
+            let cpu0 = if args.cpu_time { worker_cpu_ns()? } else { 0 };
             let f = r.render_uploaded(up, w, h)?;
-            t[i] = ms(f.stats.timings.render);
+            t[i] = if args.cpu_time {
+                (worker_cpu_ns()? - cpu0) as f64 / 1e6
+            } else {
+                ms(f.stats.timings.render)
+            };
             rays[i] = f.stats.rays();
         }
         ta.push(t[0]);
@@ -98,10 +129,14 @@ fn main() -> anyhow::Result<()> {
     }
     for (name, v, n) in [("A", &ta, rays[0]), ("B", &tb, rays[1])] {
         let (m, lo, hi) = median_min_max(v);
-        println!(
-            "{name}: {m:.1} [{lo:.1}–{hi:.1}] ms/frame, {:.1} Mrays/s",
-            n as f64 / m / 1e3
-        );
+        if args.cpu_time {
+            println!("{name}: {m:.1} [{lo:.1}–{hi:.1}] ms of worker CPU time per frame");
+        } else {
+            println!(
+                "{name}: {m:.1} [{lo:.1}–{hi:.1}] ms/frame, {:.1} Mrays/s",
+                n as f64 / m / 1e3
+            );
+        }
     }
     let (m, lo, hi) = median_min_max(&ratio);
     println!("B/A: {m:.3} [{lo:.3}–{hi:.3}] over {} pairs", args.pairs);
