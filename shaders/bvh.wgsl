@@ -33,11 +33,18 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
     let t0 = (node.min - origin) * inv_dir;
     let t1 = (node.max - origin) * inv_dir;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
+    // Comparisons and selects rather than min/max: no operand can be NaN
+    // (inv_dir is finite and non-zero), and lavapipe spends three
+    // instructions on a NaN-aware min or max against two here.
+    let swap = t1 < t0;
+    let near = select(t0, t1, swap);
+    let far = select(t1, t0, swap);
+    let near_xy = select(near.x, near.y, near.y > near.x);
+    let near_z = select(near.z, 0.0, near.z < 0.0);
+    let t_enter = select(near_xy, near_z, near_z > near_xy);
+    let far_xy = select(far.x, far.y, far.y < far.x);
     // 1.0000005 rounds up to 1 + 4·2⁻²³ in f32, just above 1 + 2γ₃.
-    let t_exit = min(min(far.x, far.y), far.z) * 1.0000005;
+    let t_exit = select(far_xy, far.z, far.z < far_xy) * 1.0000005;
     if t_enter <= min(t_exit, t_max) {
         return t_enter;
     }
@@ -104,7 +111,8 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
 }
 
 // Whether any BVH primitive blocks `ray` before `t_max` (any-hit: stops at the
-// first blocker found).
+// first blocker found). Nearer child first here too: blockers close to the
+// surface point are found sooner (docs/bench.md §6 has the measurement).
 fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
     if globals.num_bvh_nodes == 0u {
         return false;
@@ -121,14 +129,17 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
         if node.count == 0u {
             let left = node_index + 1u;
             let right = node.index;
-            let hit_left = box_entry(bvh_nodes[left], ray.origin, inv_dir, t_max) < BOX_MISS;
-            let hit_right = box_entry(bvh_nodes[right], ray.origin, inv_dir, t_max) < BOX_MISS;
+            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, t_max);
+            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, t_max);
+            let hit_left = tl < BOX_MISS;
+            let hit_right = tr < BOX_MISS;
             if hit_left || hit_right {
+                let left_first = tl <= tr;
                 if hit_left && hit_right {
-                    stack[sp] = right;
+                    stack[sp] = select(left, right, left_first);
                     sp++;
                 }
-                node_index = select(right, left, hit_left);
+                node_index = select(right, left, left_first);
                 continue;
             }
         } else {

@@ -355,7 +355,7 @@ impl CpuScene {
         }
     }
 
-    // shaders/bvh.wgsl: any hit before t_max.
+    // shaders/bvh.wgsl: any hit before t_max, nearer child first.
     fn bvh_occluded(&self, ray: Ray, t_max: f32, start: &Hit, steps: &mut u32) -> bool {
         if self.nodes.is_empty() {
             return false;
@@ -373,16 +373,16 @@ impl CpuScene {
             if node.count == 0 {
                 let left = node_index + 1;
                 let right = node.index;
-                let hit_left =
-                    box_entry(&self.nodes[left as usize], ray.origin, inv_dir, t_max) < BOX_MISS;
-                let hit_right =
-                    box_entry(&self.nodes[right as usize], ray.origin, inv_dir, t_max) < BOX_MISS;
+                let tl = box_entry(&self.nodes[left as usize], ray.origin, inv_dir, t_max);
+                let tr = box_entry(&self.nodes[right as usize], ray.origin, inv_dir, t_max);
+                let (hit_left, hit_right) = (tl < BOX_MISS, tr < BOX_MISS);
                 if hit_left || hit_right {
+                    let left_first = tl <= tr;
                     if hit_left && hit_right {
-                        stack[sp] = right;
+                        stack[sp] = if left_first { right } else { left };
                         sp += 1;
                     }
-                    node_index = if hit_left { left } else { right };
+                    node_index = if left_first { left } else { right };
                     continue;
                 }
             } else {
@@ -484,8 +484,8 @@ fn safe_inverse(d: Vec3) -> Vec3 {
     Vec3::new(f(d.x), f(d.y), f(d.z))
 }
 
-// The widened slab test of shaders/bvh.wgsl. WGSL's min/max return the other
-// operand for a NaN one, like f32::min/max.
+// The widened slab test of shaders/bvh.wgsl (no operand is NaN there, so
+// f32::min/max give the kernel's selects).
 fn box_entry(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
     let t0 = (v3(node.min) - origin) * inv_dir;
     let t1 = (v3(node.max) - origin) * inv_dir;
