@@ -1,23 +1,59 @@
-// Bounding volume hierarchy traversal (the host builds it: src/bvh.rs).
-// Nodes are depth-first: an interior node's left child is the next node and
-// `index` holds its right child; a leaf's `index` and `count` give a range of
-// `bvh_prims`, each a triangle index or a sphere index with PRIM_SPHERE set.
+// Bounding volume hierarchy traversal (the host builds the tree: src/bvh.rs,
+// and encodes it: src/render/quantised_bvh.rs). A record holds an interior
+// node's two children: their boxes as 8-bit steps in the node's frame, and
+// a reference to each, a record index or BVH_LEAF | the leaf's first entry
+// of `bvh_prims`. An entry is a triangle index, or a sphere index with
+// PRIM_SPHERE set; the leaf's last entry has PRIM_LAST set. Record 0 is the
+// root's (the root's own box is never tested: its children's lie inside).
 
 // Mirrored by render::layout::BvhNode.
 struct BvhNode {
-    min: vec3<f32>,
-    index: u32,
-    max: vec3<f32>,
-    count: u32,
+    // Frame: lower corner, and per axis the biased exponent of one step.
+    origin: vec3<f32>,
+    exponents: u32,
+    // Left child's lower and upper corner, then the right child's, a byte
+    // per coordinate.
+    quantised: vec3<u32>,
+    left: u32,
+    right: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 const PRIM_SPHERE: u32 = 0x80000000u;
+const PRIM_LAST: u32 = 0x40000000u;
+const PRIM_INDEX: u32 = 0x3fffffffu;
+const BVH_LEAF: u32 = 0x80000000u;
+// The right child of a tree that is a single leaf.
+const BVH_NONE: u32 = 0xffffffffu;
 // bvh::MAX_DEPTH: the tree is never deeper, so the stack cannot overflow.
 const BVH_STACK: u32 = 64u;
 const BOX_MISS: f32 = 3.4e38;
 
 @group(0) @binding(9) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
+
+// Entry distances of a record's two children (BOX_MISS where missed). The
+// decoded corners are exact f32 values that contain the children: q * 2^e
+// is exact, and the encoder replayed the one rounding, the addition.
+fn child_entries(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> vec2<f32> {
+    let e = vec3<u32>(node.exponents, node.exponents >> 8u, node.exponents >> 16u);
+    let step = bitcast<vec3<f32>>((e & vec3<u32>(255u)) << vec3<u32>(23u));
+    let q = node.quantised;
+    let byte = vec3<u32>(255u);
+    let left_lo = vec3<f32>(vec3<u32>(q.x, q.x >> 8u, q.x >> 16u) & byte);
+    let left_hi = vec3<f32>(vec3<u32>(q.x >> 24u, q.y, q.y >> 8u) & byte);
+    let right_lo = vec3<f32>(vec3<u32>(q.y >> 16u, q.y >> 24u, q.z) & byte);
+    let right_hi = vec3<f32>(vec3<u32>(q.z >> 8u, q.z >> 16u, q.z >> 24u) & byte);
+    let o = node.origin;
+    let tl = box_entry(o + left_lo * step, o + left_hi * step, origin, inv_dir, t_max);
+    var tr = box_entry(o + right_lo * step, o + right_hi * step, origin, inv_dir, t_max);
+    if node.right == BVH_NONE {
+        tr = BOX_MISS;
+    }
+    return vec2<f32>(tl, tr);
+}
 
 // 1/d with zero components replaced by a tiny value of the same sign, so the
 // slab test never computes 0 * inf = NaN.
@@ -30,9 +66,9 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 // Distance at which the ray enters the box, or BOX_MISS. The exit distance is
 // widened by 1 + 2γ₃ (γ₃ = 3u/(1 − 3u), u = 2⁻²⁴) so rounding in the slab test
 // never loses a hit: Ize, "Robust BVH Ray Traversal" (JCGT 2013).
-fn box_entry(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
-    let t0 = (node.min - origin) * inv_dir;
-    let t1 = (node.max - origin) * inv_dir;
+fn box_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
     // Comparisons and selects rather than min/max: no operand can be NaN
     // (inv_dir is finite and non-zero), and lavapipe spends three
     // instructions on a NaN-aware min or max against two here.
@@ -60,8 +96,8 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
     var stack: array<u32, BVH_STACK>;
     var stack_t: array<f32, BVH_STACK>;
     var sp = 0u;
-    var node_index = 0u;
-    var node_t = box_entry(bvh_nodes[0], ray.origin, inv_dir, (*hit).t);
+    var node = 0u;
+    var node_t = 0.0;
     // "While-while" (Aila and Laine 2009): every lane descends to a leaf
     // first, so the lanes of a SIMD group test their leaves together.
     loop {
@@ -70,42 +106,43 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
             if node_t >= (*hit).t {
                 break;
             }
-            let node = bvh_nodes[node_index];
-            if node.count != 0u {
+            if (node & BVH_LEAF) != 0u {
                 leaf = true;
                 break;
             }
-            let left = node_index + 1u;
-            let right = node.index;
-            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, (*hit).t);
-            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, (*hit).t);
-            let left_first = tl <= tr;
-            let near_t = select(tr, tl, left_first);
-            let far_t = select(tl, tr, left_first);
+            let record = bvh_nodes[node];
+            let t = child_entries(record, ray.origin, inv_dir, (*hit).t);
+            let left_first = t.x <= t.y;
+            let near_t = select(t.y, t.x, left_first);
+            let far_t = select(t.x, t.y, left_first);
             if far_t < BOX_MISS {
-                stack[sp] = select(left, right, left_first);
+                stack[sp] = select(record.left, record.right, left_first);
                 stack_t[sp] = far_t;
                 sp++;
             }
-            node_index = select(right, left, left_first);
+            node = select(record.right, record.left, left_first);
             node_t = near_t;
         }
         if leaf {
-            let node = bvh_nodes[node_index];
-            for (var i = node.index; i < node.index + node.count; i++) {
+            var i = node & ~BVH_LEAF;
+            loop {
                 let prim = bvh_prims[i];
                 if (prim & PRIM_SPHERE) != 0u {
-                    closest_sphere(prim & ~PRIM_SPHERE, ray, hit);
+                    closest_sphere(prim & PRIM_INDEX, ray, hit);
                 } else {
-                    closest_triangle(prim, ray, hit);
+                    closest_triangle(prim & PRIM_INDEX, ray, hit);
                 }
+                if (prim & PRIM_LAST) != 0u {
+                    break;
+                }
+                i++;
             }
         }
         if sp == 0u {
             break;
         }
         sp--;
-        node_index = stack[sp];
+        node = stack[sp];
         node_t = stack_t[sp];
     }
 }
@@ -120,45 +157,44 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
     let inv_dir = safe_inverse(ray.dir);
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
-    var node_index = 0u;
-    if box_entry(bvh_nodes[0], ray.origin, inv_dir, t_max) == BOX_MISS {
-        return false;
-    }
+    var node = 0u;
     loop {
-        let node = bvh_nodes[node_index];
-        if node.count == 0u {
-            let left = node_index + 1u;
-            let right = node.index;
-            let tl = box_entry(bvh_nodes[left], ray.origin, inv_dir, t_max);
-            let tr = box_entry(bvh_nodes[right], ray.origin, inv_dir, t_max);
-            let hit_left = tl < BOX_MISS;
-            let hit_right = tr < BOX_MISS;
+        if (node & BVH_LEAF) == 0u {
+            let record = bvh_nodes[node];
+            let t = child_entries(record, ray.origin, inv_dir, t_max);
+            let hit_left = t.x < BOX_MISS;
+            let hit_right = t.y < BOX_MISS;
             if hit_left || hit_right {
-                let left_first = tl <= tr;
+                let left_first = t.x <= t.y;
                 if hit_left && hit_right {
-                    stack[sp] = select(left, right, left_first);
+                    stack[sp] = select(record.left, record.right, left_first);
                     sp++;
                 }
-                node_index = select(right, left, left_first);
+                node = select(record.right, record.left, left_first);
                 continue;
             }
         } else {
-            for (var i = node.index; i < node.index + node.count; i++) {
+            var i = node & ~BVH_LEAF;
+            loop {
                 let prim = bvh_prims[i];
                 if (prim & PRIM_SPHERE) != 0u {
-                    if sphere_blocks(prim & ~PRIM_SPHERE, ray, t_max, start) {
+                    if sphere_blocks(prim & PRIM_INDEX, ray, t_max, start) {
                         return true;
                     }
-                } else if triangle_blocks(prim, ray, t_max, start) {
+                } else if triangle_blocks(prim & PRIM_INDEX, ray, t_max, start) {
                     return true;
                 }
+                if (prim & PRIM_LAST) != 0u {
+                    break;
+                }
+                i++;
             }
         }
         if sp == 0u {
             break;
         }
         sp--;
-        node_index = stack[sp];
+        node = stack[sp];
     }
     return false;
 }

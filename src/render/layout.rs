@@ -17,7 +17,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 use crate::bvh::{Aabb, Bvh};
 use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
@@ -148,14 +147,25 @@ pub struct ShaderNode {
     pub _pad: [u32; 2],
 }
 
-/// Mirrors `BvhNode` in `shaders/bvh.wgsl`.
+/// Mirrors `BvhNode` in `shaders/bvh.wgsl`: an interior node's two
+/// children, their boxes quantised in the node's frame (see
+/// [`super::quantised_bvh`]).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub min: [f32; 3],
-    pub index: u32,
-    pub max: [f32; 3],
-    pub count: u32,
+    /// Lower corner of the frame.
+    pub origin: [f32; 3],
+    /// Biased exponent (as in an `f32`) of each axis's step, one byte each.
+    pub exponents: u32,
+    /// Twelve steps, a byte each: the left child's lower then upper corner
+    /// (x, y, z), then the right child's.
+    pub quantised: [u32; 3],
+    /// Child references: a record index, or `LEAF | first primitive`.
+    pub left: u32,
+    pub right: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Mirrors `QueryRay` in `shaders/queries.wgsl`.
@@ -440,20 +450,13 @@ impl GpuScene {
             let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
             (a.min(b).min(c).to_array(), a.max(b).max(c).to_array())
         });
-        self.bvh_prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes = bvh
-            .nodes
-            .par_iter()
-            .map(|n| {
-                let (min, max) = padded_outward_f32(n.bounds);
-                BvhNode {
-                    min,
-                    index: n.index,
-                    max,
-                    count: n.count,
-                }
-            })
-            .collect();
+        let mut prims = bvh.prim_refs(self.triangles.len());
+        self.bvh_nodes = super::quantised_bvh::encode(
+            &bvh,
+            |i| padded_outward_f32(bvh.nodes[i].bounds),
+            &mut prims,
+        );
+        self.bvh_prims = prims;
         self.bvh_depth = bvh.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
     }
@@ -514,7 +517,11 @@ mod tests {
                     _pad2
                 ]
             ),
-            layout!("BvhNode", BvhNode, [min, index, max, count]),
+            layout!(
+                "BvhNode",
+                BvhNode,
+                [origin, exponents, quantised, left, right, _pad0, _pad1, _pad2]
+            ),
             layout!("QueryRay", QueryRay, [origin, _pad0, dir, _pad1]),
             layout!(
                 "Aov",

@@ -4,6 +4,7 @@
 
 pub mod compile;
 pub mod layout;
+pub mod quantised_bvh;
 mod reload;
 mod trace;
 
@@ -487,7 +488,8 @@ impl Renderer {
             upload: layout + t0.elapsed(),
             bvh_nodes: gpu.bvh_nodes.len(),
             bvh_depth: gpu.bvh_depth,
-            bvh_bytes: gpu.bvh_nodes.len() * 32 + gpu.bvh_prims.len() * 4,
+            bvh_bytes: std::mem::size_of_val(gpu.bvh_nodes.as_slice())
+                + std::mem::size_of_val(gpu.bvh_prims.as_slice()),
         })
     }
 

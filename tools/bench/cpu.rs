@@ -17,10 +17,12 @@
 //! [`CpuScene::new`] refuses scenes that use them.
 
 use glam::{IVec3, Vec3};
+use penumbra::render::layout::BvhNode;
 use penumbra::render::layout::{
-    BvhNode, GpuScene, Light, Plane, ShaderNode, Triangle, VertexNormals, LIGHT_DIRECTIONAL,
-    NO_NORMALS, SHADER_BLINN_PHONG, SHADER_CHECKER, SHADER_PHONG,
+    GpuScene, Light, Plane, ShaderNode, Triangle, VertexNormals, LIGHT_DIRECTIONAL, NO_NORMALS,
+    SHADER_BLINN_PHONG, SHADER_CHECKER, SHADER_PHONG,
 };
+use penumbra::render::quantised_bvh::{decode, LEAF, NONE, PRIM_LAST};
 use rayon::prelude::*;
 
 const FAR: f32 = 3.0e38;
@@ -301,7 +303,8 @@ impl CpuScene {
         }
     }
 
-    // shaders/bvh.wgsl: nearest hit, nearest child first.
+    // shaders/bvh.wgsl: nearest hit, nearest child first, from the root's
+    // record (0).
     fn bvh_closest(&self, ray: Ray, hit: &mut Hit, steps: &mut u32) {
         if self.nodes.is_empty() {
             return;
@@ -310,31 +313,35 @@ impl CpuScene {
         let mut stack = [0u32; BVH_STACK];
         let mut stack_t = [0f32; BVH_STACK];
         let mut sp = 0usize;
-        let mut node_index = 0u32;
-        let mut node_t = box_entry(&self.nodes[0], ray.origin, inv_dir, hit.t);
+        let mut node = 0u32;
+        let mut node_t = 0.0f32;
         loop {
             *steps += 1;
             if node_t < hit.t {
-                let node = &self.nodes[node_index as usize];
-                if node.count == 0 {
-                    let left = node_index + 1;
-                    let right = node.index;
-                    let tl = box_entry(&self.nodes[left as usize], ray.origin, inv_dir, hit.t);
-                    let tr = box_entry(&self.nodes[right as usize], ray.origin, inv_dir, hit.t);
+                if node & LEAF == 0 {
+                    let record = &self.nodes[node as usize];
+                    let (tl, tr) = child_entries(record, ray.origin, inv_dir, hit.t);
                     let left_first = tl <= tr;
                     let (near_t, far_t) = if left_first { (tl, tr) } else { (tr, tl) };
+                    let (near, far) = if left_first {
+                        (record.left, record.right)
+                    } else {
+                        (record.right, record.left)
+                    };
                     if far_t < BOX_MISS {
-                        stack[sp] = if left_first { right } else { left };
+                        stack[sp] = far;
                         stack_t[sp] = far_t;
                         sp += 1;
                     }
-                    node_index = if left_first { left } else { right };
+                    node = near;
                     node_t = near_t;
                     continue;
                 }
-                for i in node.index..node.index + node.count {
+                let mut i = (node & !LEAF) as usize;
+                loop {
                     *steps += 1;
-                    let prim = self.prims[i as usize];
+                    let entry = self.prims[i];
+                    let prim = entry & !PRIM_LAST;
                     let h = intersect_triangle(&self.triangles[prim as usize], ray, hit.t);
                     if h[0] > 0.0 {
                         hit.found = true;
@@ -344,13 +351,17 @@ impl CpuScene {
                         hit.u = h[1];
                         hit.v = h[2];
                     }
+                    if entry & PRIM_LAST != 0 {
+                        break;
+                    }
+                    i += 1;
                 }
             }
             if sp == 0 {
                 break;
             }
             sp -= 1;
-            node_index = stack[sp];
+            node = stack[sp];
             node_t = stack_t[sp];
         }
     }
@@ -363,45 +374,49 @@ impl CpuScene {
         let inv_dir = safe_inverse(ray.dir);
         let mut stack = [0u32; BVH_STACK];
         let mut sp = 0usize;
-        let mut node_index = 0u32;
-        if box_entry(&self.nodes[0], ray.origin, inv_dir, t_max) == BOX_MISS {
-            return false;
-        }
+        let mut node = 0u32;
         loop {
             *steps += 1;
-            let node = &self.nodes[node_index as usize];
-            if node.count == 0 {
-                let left = node_index + 1;
-                let right = node.index;
-                let tl = box_entry(&self.nodes[left as usize], ray.origin, inv_dir, t_max);
-                let tr = box_entry(&self.nodes[right as usize], ray.origin, inv_dir, t_max);
+            if node & LEAF == 0 {
+                let record = &self.nodes[node as usize];
+                let (tl, tr) = child_entries(record, ray.origin, inv_dir, t_max);
                 let (hit_left, hit_right) = (tl < BOX_MISS, tr < BOX_MISS);
                 if hit_left || hit_right {
-                    let left_first = tl <= tr;
+                    let (near, far) = if tl <= tr {
+                        (record.left, record.right)
+                    } else {
+                        (record.right, record.left)
+                    };
                     if hit_left && hit_right {
-                        stack[sp] = if left_first { right } else { left };
+                        stack[sp] = far;
                         sp += 1;
                     }
-                    node_index = if left_first { left } else { right };
+                    node = near;
                     continue;
                 }
             } else {
-                for i in node.index..node.index + node.count {
+                let mut i = (node & !LEAF) as usize;
+                loop {
                     *steps += 1;
-                    let prim = self.prims[i as usize];
-                    if start.kind == Kind::Triangle && start.index == prim {
-                        continue;
-                    }
-                    if intersect_triangle(&self.triangles[prim as usize], ray, t_max)[0] > 0.0 {
+                    let entry = self.prims[i];
+                    let prim = entry & !PRIM_LAST;
+                    let skip = start.kind == Kind::Triangle && start.index == prim;
+                    if !skip
+                        && intersect_triangle(&self.triangles[prim as usize], ray, t_max)[0] > 0.0
+                    {
                         return true;
                     }
+                    if entry & PRIM_LAST != 0 {
+                        break;
+                    }
+                    i += 1;
                 }
             }
             if sp == 0 {
                 break;
             }
             sp -= 1;
-            node_index = stack[sp];
+            node = stack[sp];
         }
         false
     }
@@ -484,11 +499,24 @@ fn safe_inverse(d: Vec3) -> Vec3 {
     Vec3::new(f(d.x), f(d.y), f(d.z))
 }
 
+// shaders/bvh.wgsl's child_entries: both children's decoded boxes through
+// the widened slab test (BOX_MISS for a single-leaf tree's absent child).
+fn child_entries(record: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> (f32, f32) {
+    let [l, r] = decode(record);
+    let tl = box_entry(l, origin, inv_dir, t_max);
+    let tr = if record.right == NONE {
+        BOX_MISS
+    } else {
+        box_entry(r, origin, inv_dir, t_max)
+    };
+    (tl, tr)
+}
+
 // The widened slab test of shaders/bvh.wgsl (no operand is NaN there, so
 // f32::min/max give the kernel's selects).
-fn box_entry(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
-    let t0 = (v3(node.min) - origin) * inv_dir;
-    let t1 = (v3(node.max) - origin) * inv_dir;
+fn box_entry(b: ([f32; 3], [f32; 3]), origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+    let t0 = (v3(b.0) - origin) * inv_dir;
+    let t1 = (v3(b.1) - origin) * inv_dir;
     let near = t0.min(t1);
     let far = t0.max(t1);
     let t_enter = near.x.max(near.y).max(near.z.max(0.0));
