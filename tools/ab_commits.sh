@@ -30,7 +30,7 @@ build() { # commit -> path of its ab binary
     # One target directory for all scratch builds (dependencies build once);
     # each commit's binary is copied out of it.
     if [ ! -x "$scratch/ab-$sha" ]; then
-        (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build --release --example ab >&2)
+        (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build -q --release --example ab >&2)
         cp "$scratch/target/release/examples/ab" "$scratch/ab-$sha"
     fi
     echo "$scratch/ab-$sha"

@@ -122,12 +122,11 @@ fn quantise(
             lo
         };
         let e = exponent(origin, hi);
-        let s = scale(e);
         node.origin[axis] = origin;
         node.exponents |= ((e + 127) as u32) << (8 * axis);
         for (k, b) in [left, r].iter().enumerate() {
-            bytes[6 * k + axis] = lower(origin, s, b.0[axis]);
-            bytes[6 * k + 3 + axis] = upper(origin, s, b.1[axis]);
+            bytes[6 * k + axis] = lower(origin, e, b.0[axis]);
+            bytes[6 * k + 3 + axis] = upper(origin, e, b.1[axis]);
         }
     }
     for (w, chunk) in node.quantised.iter_mut().zip(bytes.chunks(4)) {
@@ -151,9 +150,12 @@ fn decoded(origin: f32, s: f32, q: u8) -> [f32; 2] {
 
 /// The smallest exponent whose 255 steps reach `hi` from `origin`.
 fn exponent(origin: f32, hi: f32) -> i32 {
-    let extent = f64::from(hi) - f64::from(origin);
-    let mut e = if extent > 0.0 {
-        ((extent / 255.0).log2().ceil() as i32).clamp(MIN_EXP, MAX_EXP)
+    let step = (f64::from(hi) - f64::from(origin)) / 255.0;
+    let mut e = if step > 0.0 {
+        // ⌈log2(step)⌉ from the bits (step is a normal f64 here).
+        let bits = step.to_bits();
+        let e = ((bits >> 52) & 0x7ff) as i32 - 1023;
+        (e + i32::from(bits & ((1 << 52) - 1) != 0)).clamp(MIN_EXP, MAX_EXP)
     } else {
         MIN_EXP
     };
@@ -163,10 +165,18 @@ fn exponent(origin: f32, hi: f32) -> i32 {
     e
 }
 
-/// The largest step whose decoded value is at most `lo`.
-fn lower(origin: f32, s: f32, lo: f32) -> u8 {
-    let q = ((f64::from(lo) - f64::from(origin)) / f64::from(s)).floor();
-    let mut q = q.clamp(0.0, 255.0) as u8;
+/// Steps (of 2^e) from `origin` to `x`, a non-negative f64 (exact: the
+/// scale is a power of two).
+fn steps(origin: f32, e: i32, x: f32) -> f64 {
+    let inv = f64::from_bits(((1023 - e) as u64) << 52);
+    (f64::from(x) - f64::from(origin)) * inv
+}
+
+/// The largest step whose decoded value is at most `lo` (≥ origin).
+fn lower(origin: f32, e: i32, lo: f32) -> u8 {
+    // Truncation is the floor here: the value is not negative.
+    let mut q = steps(origin, e, lo).min(255.0) as u8;
+    let s = scale(e);
     while q > 0 && decoded(origin, s, q).iter().any(|&x| x > lo) {
         q -= 1;
     }
@@ -174,9 +184,13 @@ fn lower(origin: f32, s: f32, lo: f32) -> u8 {
 }
 
 /// The smallest step whose decoded value is at least `hi`.
-fn upper(origin: f32, s: f32, hi: f32) -> u8 {
-    let q = ((f64::from(hi) - f64::from(origin)) / f64::from(s)).ceil();
-    let mut q = q.clamp(0.0, 255.0) as u8;
+fn upper(origin: f32, e: i32, hi: f32) -> u8 {
+    let v = steps(origin, e, hi).min(255.0);
+    let mut q = v as u8;
+    if f64::from(q) < v {
+        q += 1;
+    }
+    let s = scale(e);
     while q < 255 && decoded(origin, s, q).iter().any(|&x| x < hi) {
         q += 1;
     }
@@ -252,6 +266,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4096))]
         /// Both decoded children contain their exact boxes, whether or not
         /// the device flushes subnormals.
         #[test]
