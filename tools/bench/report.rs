@@ -532,7 +532,7 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(o, "## 6. Targets\n");
     let _ = writeln!(
         o,
-        "The peers, as given in the issue (measured on this kind of 2-core machine, same scene, 2 threads, medians), against penumbra's render phase on lavapipe from section 1, and against a plain multi-threaded Rust CPU implementation of penumbra's own algorithm measured in this run (`tools/bench/cpu.rs`: the same camera-relative `f32` data and BVH, the same primary rays, nearest-first traversal with the same slab test, u,v-first Möller–Trumbore (and the GPU kernel set to `--triangle-test uv-first` for this comparison), Phong shading, the same shadow rays with the same self-skip and Wächter–Binder offset; rows in parallel with rayon on {} threads).\n",
+        "The peers, as given in the issue (measured on this kind of 2-core machine, same scene, 2 threads, medians), against penumbra's render phase on lavapipe from section 1, and against a plain multi-threaded Rust CPU implementation of penumbra's own algorithm measured in this run (`tools/bench/cpu.rs`: the same camera-relative `f32` data and quantised BVH records, the same primary rays, nearest-first traversal with the same decoding and slab test, u,v-first Möller–Trumbore (and the GPU kernel set to `--triangle-test uv-first` for this comparison), Phong shading, the same shadow rays with the same self-skip and Wächter–Binder offset; rows in parallel with rayon on {} threads).\n",
         cpu.threads
     );
     let base = bunny.render_ms.median;
