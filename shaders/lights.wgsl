@@ -39,6 +39,13 @@ struct Light {
 
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 
+// lights[0], read by the kernel's first statement. lavapipe loads data at a
+// uniform address once per SIMD group only outside all branches and loops;
+// inside them every lane loads for itself, and the light loop is inside
+// both (0.95x the bunny frame: docs/bench.md §6). The host always uploads at
+// least one light, so this read is in bounds.
+var<private> first_light: Light;
+
 // What a light delivers at a point: the unit direction towards it, the
 // distance a shadow ray must cover, and the falloff factor.
 struct LightSample {

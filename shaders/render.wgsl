@@ -74,6 +74,8 @@ var<immediate> push: PushConstants;
 
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
+    // Before any branch (see first_light).
+    first_light = lights[0];
     // The warm-up dispatch makes the driver compile the kernel (lavapipe
     // compiles at the first dispatch) without rendering anything.
     if (push.flags & FLAG_WARM_UP) != 0u {

@@ -438,6 +438,14 @@ impl Renderer {
             ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
         };
         let image_bytes = width as u64 * height as u64 * 16;
+        // The kernel reads the first light before it knows whether there is
+        // one (shaders/lights.wgsl, first_light): upload at least one.
+        let no_light = [layout::Light::zeroed()];
+        let lights = if gpu.lights.is_empty() {
+            &no_light[..]
+        } else {
+            &gpu.lights[..]
+        };
         let buffers = vec![
             ctx.create_buffer_with_data(
                 "globals",
@@ -448,7 +456,7 @@ impl Renderer {
             storage("spheres", bytemuck::cast_slice(&gpu.spheres))?,
             storage("triangles", bytemuck::cast_slice(&gpu.triangles))?,
             storage("vertex normals", bytemuck::cast_slice(&gpu.vertex_normals))?,
-            storage("lights", bytemuck::cast_slice(&gpu.lights))?,
+            storage("lights", bytemuck::cast_slice(lights))?,
             storage("shaders", bytemuck::cast_slice(&gpu.shaders))?,
             ctx.create_buffer("image", BufferUsage::Storage, image_bytes)?,
             ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
