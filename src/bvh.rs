@@ -301,11 +301,6 @@ impl Bvh {
             })
             .sum()
     }
-
-    /// Bytes the GPU copy takes (32 per node, 4 per primitive reference).
-    pub fn gpu_bytes(&self) -> usize {
-        self.nodes.len() * 32 + self.prims.len() * 4
-    }
 }
 
 fn flatten(tree: &Tree, out: &mut Vec<Node>) {
