@@ -1177,7 +1177,7 @@ pub fn analysis(r: &Results) -> String {
         }
     ));
     o.push_str(&format!(
-        "2. **Divergence.** lavapipe runs the 8×8 workgroup as SIMD groups of 8 invocations (a row of 8 pixels, one per 32-bit lane of a 256-bit register); a loop iterates until the slowest lane is done. Replaying the kernel's traversal on the CPU with the same BVH (`CpuScene::traversal_steps`: node visits plus triangle tests, {:.1} per pixel on average for the primary and shadow ray together) gives a SIMD-8 utilisation of **{:.0}%**: {:.0}% of lane-iterations are idle lanes waiting for the slowest ray of their group, so the 8-wide kernel does at most {:.1} scalar traversals' worth of work per iteration.\n",
+        "2. **Divergence.** lavapipe runs the 8×8 workgroup as SIMD groups of 8 invocations (a row of 8 pixels, one per 32-bit lane of a 256-bit register); a loop iterates until the slowest lane is done. Replaying the traversal on the CPU with the same tree (`CpuScene::traversal_steps`, the CPU port's order: node visits plus triangle tests, {:.1} per pixel on average for the primary and shadow ray together) gives a SIMD-8 utilisation of **{:.0}%**: {:.0}% of lane-iterations are idle lanes waiting for the slowest ray of their group, so the 8-wide kernel does at most {:.1} scalar traversals' worth of work per iteration.\n",
         cpu.mean_steps,
         u * 100.0,
         (1.0 - u) * 100.0,

@@ -426,8 +426,25 @@ impl GpuScene {
     /// Builds the BVH over the primitives exactly as the GPU sees them (the
     /// rounded `f32` values), with boxes rounded outwards to `f32` and padded
     /// by a few ulps so that no hit the intersection routines report can lie
-    /// outside its box.
+    /// outside its box ([`node_bounds_f32`]), and encodes it for the kernel
+    /// ([`super::quantised_bvh`]).
     pub fn build_bvh(&mut self) {
+        let bvh = self.build_tree();
+        let mut prims = bvh.prim_refs(self.triangles.len());
+        self.bvh_nodes = super::quantised_bvh::encode(
+            &bvh,
+            |i| node_bounds_f32(bvh.nodes[i].bounds),
+            &mut prims,
+        );
+        self.bvh_prims = prims;
+        self.bvh_depth = bvh.depth;
+        self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
+    }
+
+    /// The host tree [`GpuScene::build_bvh`] encodes: over the triangles,
+    /// then the spheres (the build is deterministic, so calling this again
+    /// gives the same tree).
+    pub fn build_tree(&self) -> Bvh {
         // Triangle boxes straight from the f32 vertices (exact); sphere
         // boxes computed in f64 and rounded outwards.
         let spheres: Vec<([f32; 3], [f32; 3])> = self
@@ -436,36 +453,28 @@ impl GpuScene {
             .map(|s| {
                 let c = DVec3::from_array(s.center.map(f64::from));
                 let r = DVec3::splat(s.radius as f64);
-                padded_outward_f32(Aabb {
+                node_bounds_f32(Aabb {
                     min: c - r,
                     max: c + r,
                 })
             })
             .collect();
         let triangles = &self.triangles;
-        let bvh = Bvh::build_f32(triangles.len() + spheres.len(), |i| {
+        Bvh::build_f32(triangles.len() + spheres.len(), |i| {
             let Some(t) = triangles.get(i) else {
                 return spheres[i - triangles.len()];
             };
             let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
             (a.min(b).min(c).to_array(), a.max(b).max(c).to_array())
-        });
-        let mut prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode(
-            &bvh,
-            |i| padded_outward_f32(bvh.nodes[i].bounds),
-            &mut prims,
-        );
-        self.bvh_prims = prims;
-        self.bvh_depth = bvh.depth;
-        self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
+        })
     }
 }
 
 /// A box in `f32`, rounded outwards and padded by 2⁻²⁰ of its largest
 /// coordinate magnitude (a few ulps), so it contains the `f64` box and the
-/// rounding error of the ray/primitive tests.
-fn padded_outward_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
+/// rounding error of the ray/primitive tests: the BVH node boxes the kernel's
+/// records encode.
+pub fn node_bounds_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
     let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 20) as f64);
     Aabb {
         min: b.min - pad,
