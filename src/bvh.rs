@@ -150,16 +150,29 @@ impl Aabb {
     }
 }
 
-/// One node of the flattened tree.
+/// One node of the flattened tree: 32 bytes, its box in `f32` (the
+/// builder's boxes, which contain the inputs' boxes rounded outwards).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Node {
-    /// Bounds of everything below.
-    pub bounds: Aabb,
+    /// Lower corner of the bounds of everything below.
+    pub min: [f32; 3],
     /// Leaf: index of the first primitive reference; interior: index of the
     /// right child (the left child is the next node).
     pub index: u32,
+    /// Upper corner.
+    pub max: [f32; 3],
     /// Leaf: number of primitives (≥ 1); interior: 0.
     pub count: u32,
+}
+
+impl Node {
+    /// The bounds, exactly, in `f64`.
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: DVec3::from_array(self.min.map(f64::from)),
+            max: DVec3::from_array(self.max.map(f64::from)),
+        }
+    }
 }
 
 /// A built hierarchy.
@@ -284,12 +297,12 @@ impl Bvh {
         let Some(root) = self.nodes.first() else {
             return 0.0;
         };
-        let root_area = root.bounds.area();
+        let root_area = root.bounds().area();
         self.nodes
             .iter()
             .map(|n| {
                 let p = if root_area > 0.0 {
-                    n.bounds.area() / root_area
+                    n.bounds().area() / root_area
                 } else {
                     1.0
                 };
@@ -308,7 +321,8 @@ fn flatten(tree: &Tree, out: &mut Vec<Node>) {
         Tree::Chunk(nodes) => {
             let offset = out.len() as u32;
             out.extend(nodes.iter().map(|n| Node {
-                bounds: n.bounds.to_f64(),
+                min: n.bounds.min.to_array(),
+                max: n.bounds.max.to_array(),
                 index: if n.count == 0 {
                     n.index + offset
                 } else {
@@ -322,7 +336,8 @@ fn flatten(tree: &Tree, out: &mut Vec<Node>) {
         } => {
             let at = out.len();
             out.push(Node {
-                bounds: bounds.to_f64(),
+                min: bounds.min.to_array(),
+                max: bounds.max.to_array(),
                 index: 0,
                 count: 0,
             });
@@ -361,6 +376,7 @@ impl Box32 {
         Box32::new(min, max)
     }
 
+    #[cfg(test)]
     fn to_f64(self) -> Aabb {
         Aabb {
             min: self.min.as_dvec3(),
@@ -840,13 +856,14 @@ mod tests {
         assert!(depth < MAX_DEPTH);
         if n.count > 0 {
             for &p in &bvh.prims[n.index as usize..(n.index + n.count) as usize] {
-                assert!(n.bounds.contains(&boxes[p as usize]));
+                assert!(n.bounds().contains(&boxes[p as usize]));
             }
             n.count as usize
         } else {
             let (l, r) = (node + 1, n.index as usize);
             assert!(
-                n.bounds.contains(&bvh.nodes[l].bounds) && n.bounds.contains(&bvh.nodes[r].bounds)
+                n.bounds().contains(&bvh.nodes[l].bounds())
+                    && n.bounds().contains(&bvh.nodes[r].bounds())
             );
             check(bvh, boxes, l, depth + 1) + check(bvh, boxes, r, depth + 1)
         }
@@ -889,7 +906,10 @@ mod tests {
         }));
         let bvh = Bvh::build(&boxes);
         let root = bvh.nodes[0];
-        let (l, r) = (bvh.nodes[1].bounds, bvh.nodes[root.index as usize].bounds);
+        let (l, r) = (
+            bvh.nodes[1].bounds(),
+            bvh.nodes[root.index as usize].bounds(),
+        );
         assert!(l.max.x < 1e3 && r.min.x > 1e3 || r.max.x < 1e3 && l.min.x > 1e3);
     }
 

@@ -64,7 +64,7 @@ impl Accel {
             .map(|n| {
                 // A few thousand ulps of padding: hits computed with rounding
                 // error stay inside their boxes.
-                let b = n.bounds;
+                let b = n.bounds();
                 let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 40) as f64);
                 Node {
                     min: b.min - DVec3::splat(pad),

@@ -433,7 +433,7 @@ impl GpuScene {
         let mut prims = bvh.prim_refs(self.triangles.len());
         self.bvh_nodes = super::quantised_bvh::encode(
             &bvh,
-            |i| node_bounds_f32(bvh.nodes[i].bounds),
+            |i| node_bounds_f32(bvh.nodes[i].bounds()),
             &mut prims,
         );
         self.bvh_prims = prims;

@@ -56,13 +56,10 @@ pub fn encode(
     if nodes.is_empty() {
         return Vec::new();
     }
-    // Record of each interior node: the interior nodes before it
-    // (depth-first order is kept).
-    let mut record = vec![0u32; nodes.len()];
-    let mut interior = Vec::new();
+    // The interior nodes in depth-first order; record r is interior[r].
+    let mut interior = Vec::with_capacity(nodes.len() / 2 + 1);
     for (i, n) in nodes.iter().enumerate() {
         if n.count == 0 {
-            record[i] = interior.len() as u32;
             interior.push(i);
         } else {
             prims[(n.index + n.count - 1) as usize] |= PRIM_LAST;
@@ -71,23 +68,30 @@ pub fn encode(
     if interior.is_empty() {
         return vec![quantise(bounds(0), None, LEAF | nodes[0].index, NONE)];
     }
-    let child = |i: usize| {
-        let n = &nodes[i];
-        if n.count == 0 {
-            record[i]
-        } else {
+    // A child's reference from its parent's record r (node i): an interior
+    // left child is the next record; before an interior right child come
+    // the left subtree's interior nodes, (size - 1) / 2 of its
+    // right - i - 1 nodes (every interior node has two children).
+    let child = |r: usize, i: usize, c: usize| {
+        let n = &nodes[c];
+        if n.count != 0 {
             LEAF | n.index
+        } else if c == i + 1 {
+            (r + 1) as u32
+        } else {
+            (r + 1 + (c - i - 2) / 2) as u32
         }
     };
     interior
         .par_iter()
-        .map(|&i| {
+        .enumerate()
+        .map(|(r, &i)| {
             let right = nodes[i].index as usize;
             quantise(
                 bounds(i + 1),
                 Some(bounds(right)),
-                child(i + 1),
-                child(right),
+                child(r, i, i + 1),
+                child(r, i, right),
             )
         })
         .collect()
@@ -323,7 +327,7 @@ mod tests {
     fn records_reach_every_primitive_once_inside_their_boxes() {
         let boxes = random_boxes(5000);
         let bvh = Bvh::build(&boxes);
-        let f32_box = |i: usize| bvh.nodes[i].bounds.outward_f32();
+        let f32_box = |i: usize| bvh.nodes[i].bounds().outward_f32();
         let mut prims = bvh.prims.clone();
         let records = encode(&bvh, f32_box, &mut prims);
         let interior = bvh.nodes.iter().filter(|n| n.count == 0).count();
@@ -366,7 +370,7 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         assert_eq!(bvh.nodes.len(), 1);
         let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, |i| bvh.nodes[i].bounds.outward_f32(), &mut prims);
+        let records = encode(&bvh, |i| bvh.nodes[i].bounds().outward_f32(), &mut prims);
         assert_eq!(records.len(), 1);
         assert_eq!((records[0].left, records[0].right), (LEAF, NONE));
         assert_eq!(prims[1] & PRIM_LAST, PRIM_LAST);

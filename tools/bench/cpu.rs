@@ -138,7 +138,7 @@ impl CpuScene {
             .nodes
             .iter()
             .map(|n| {
-                let (min, max) = node_bounds_f32(n.bounds);
+                let (min, max) = node_bounds_f32(n.bounds());
                 Node {
                     min,
                     index: n.index,
