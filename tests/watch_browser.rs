@@ -238,7 +238,12 @@ fn the_live_page_follows_edits_and_shows_errors() {
         fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
     )
     .unwrap();
-    let edited = b.wait("the edited image", |v| px(v).is_some_and(|c| c[0] == 0));
+    // The full image, not the preview before it: otherwise the full one can
+    // still arrive after the error below and change the version.
+    let edited = b.wait("the edited image", |v| {
+        px(v).is_some_and(|c| c[0] == 0)
+            && v["line"].as_str().is_some_and(|l| l.contains("full 64x48"))
+    });
     assert_ne!(edited["version"].as_str().unwrap(), v0);
     assert!(edited["error"].is_null(), "{edited}");
     assert!(
