@@ -426,16 +426,13 @@ impl GpuScene {
     /// Builds the BVH over the primitives exactly as the GPU sees them (the
     /// rounded `f32` values), with boxes rounded outwards to `f32` and padded
     /// by a few ulps so that no hit the intersection routines report can lie
-    /// outside its box ([`node_bounds_f32`]), and encodes it for the kernel
+    /// outside its box ([`node_bounds`]), and encodes it for the kernel
     /// ([`super::quantised_bvh`]).
     pub fn build_bvh(&mut self) {
         let bvh = self.build_tree();
         let mut prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode(
-            &bvh,
-            |i| node_bounds_f32(bvh.nodes[i].bounds()),
-            &mut prims,
-        );
+        self.bvh_nodes =
+            super::quantised_bvh::encode(&bvh, |i| node_bounds(bvh.nodes[i].bounds()), &mut prims);
         self.bvh_prims = prims;
         self.bvh_depth = bvh.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
@@ -470,17 +467,21 @@ impl GpuScene {
     }
 }
 
-/// A box in `f32`, rounded outwards and padded by 2⁻²⁰ of its largest
-/// coordinate magnitude (a few ulps), so it contains the `f64` box and the
-/// rounding error of the ray/primitive tests: the BVH node boxes the kernel's
-/// records encode.
-pub fn node_bounds_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
+/// A box padded by 2⁻²⁰ of its largest coordinate magnitude (a few `f32`
+/// ulps), so it contains the rounding error of the ray/primitive tests: the
+/// boxes the kernel's BVH records contain.
+pub fn node_bounds(b: Aabb) -> Aabb {
     let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 20) as f64);
     Aabb {
         min: b.min - pad,
         max: b.max + pad,
     }
-    .outward_f32()
+}
+
+/// [`node_bounds`] rounded outwards to `f32`: it contains the `f64` box and
+/// the rounding error of the ray/primitive tests.
+pub fn node_bounds_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
+    node_bounds(b).outward_f32()
 }
 
 /// The point of a plane nearest to `eye`: a far-away `point` on the plane

@@ -14,18 +14,18 @@
 //! (docs/bench.md §6), and the nodes take 48 bytes per interior node instead
 //! of 32 per node, 0.75× the memory.
 //!
-//! Conservative by construction: the kernel decodes a coordinate as
-//! `origin + f32(q) * 2^e`, where `q * 2^e` is exact, so the one rounding is
-//! the addition, which the encoder replays in `f32` and corrects (a lower
-//! bound must not round up past the true one, an upper bound not below it),
-//! also for a device that flushes subnormal results to zero. The decoded box
-//! therefore always contains the exact `f32` box, and the slab test's
-//! widening (Ize 2013) applies to it unchanged.
+//! Conservative by construction: each axis of a record is quantised on a
+//! grid `k·2^e` coarse enough that every grid point within reach is an
+//! `f32`, so the kernel's `origin + f32(q) * 2^e` is exact — no rounding, no
+//! subnormals, the same on every device, fused or not — and the encoder
+//! picks the grid points below and above each child's corners (checked
+//! exactly). The decoded box therefore always contains the exact `f32` box,
+//! and the slab test's widening (Ize 2013) applies to it unchanged.
 
 use rayon::prelude::*;
 
 use super::layout::BvhNode;
-use crate::bvh::Bvh;
+use crate::bvh::{Aabb, Bvh};
 
 /// A child reference with this bit set is a leaf: the low bits give its
 /// first entry in the primitive references (the last one carries
@@ -47,11 +47,7 @@ const MAX_EXP: i32 = 127;
 /// leaf gets one record with that leaf on the left and [`NONE`] on the
 /// right. `prims` are the tree's primitive references; the last of each
 /// leaf gets [`PRIM_LAST`].
-pub fn encode(
-    bvh: &Bvh,
-    bounds: impl Fn(usize) -> ([f32; 3], [f32; 3]) + Sync,
-    prims: &mut [u32],
-) -> Vec<BvhNode> {
+pub fn encode(bvh: &Bvh, bounds: impl Fn(usize) -> Aabb + Sync, prims: &mut [u32]) -> Vec<BvhNode> {
     let nodes = &bvh.nodes;
     if nodes.is_empty() {
         return Vec::new();
@@ -98,12 +94,7 @@ pub fn encode(
 }
 
 /// The record of two children (the second absent for a single-leaf tree).
-fn quantise(
-    left: ([f32; 3], [f32; 3]),
-    right: Option<([f32; 3], [f32; 3])>,
-    left_ref: u32,
-    right_ref: u32,
-) -> BvhNode {
+fn quantise(left: Aabb, right: Option<Aabb>, left_ref: u32, right_ref: u32) -> BvhNode {
     let r = right.unwrap_or(left);
     let mut node = BvhNode {
         left: left_ref,
@@ -112,25 +103,31 @@ fn quantise(
     };
     let mut bytes = [0u8; 12];
     for axis in 0..3 {
-        let lo = left.0[axis].min(r.0[axis]);
-        let hi = left.1[axis].max(r.1[axis]);
-        // A subnormal origin could be flushed when read: take a normal (or
-        // zero) value below it instead.
-        let origin = if lo.is_subnormal() {
-            if lo > 0.0 {
-                0.0
-            } else {
-                -f32::MIN_POSITIVE
-            }
-        } else {
-            lo
-        };
-        let e = exponent(origin, hi);
-        node.origin[axis] = origin;
+        let lo = left.min[axis].min(r.min[axis]);
+        let hi = left.max[axis].max(r.max[axis]);
+        let e = grid_exponent(lo, hi);
+        let s = f64::from_bits(((e + 1023) as u64) << 52);
+        let inv = f64::from_bits(((1023 - e) as u64) << 52);
+        // The frame starts at the grid point at or below lo.
+        let origin = floor(lo * inv) * s;
+        node.origin[axis] = origin as f32;
         node.exponents |= ((e + 127) as u32) << (8 * axis);
+        // Grid point q (exact in f64 as in f32).
+        let point = |q: f64| origin + q * s;
         for (k, b) in [left, r].iter().enumerate() {
-            bytes[6 * k + axis] = lower(origin, e, b.0[axis]);
-            bytes[6 * k + 3 + axis] = upper(origin, e, b.1[axis]);
+            // Steps from the origin; the subtraction can round (a tiny x
+            // far from a huge origin), so the grid point is checked, exactly.
+            let (x, y) = (b.min[axis], b.max[axis]);
+            let mut q = floor((x - origin) * inv).clamp(0.0, 255.0);
+            if point(q) > x {
+                q -= 1.0;
+            }
+            bytes[6 * k + axis] = q as u8;
+            let mut q = (-floor((origin - y) * inv)).clamp(0.0, 255.0);
+            if point(q) < y {
+                q += 1.0;
+            }
+            bytes[6 * k + 3 + axis] = q as u8;
         }
     }
     for (w, chunk) in node.quantised.iter_mut().zip(bytes.chunks(4)) {
@@ -139,66 +136,46 @@ fn quantise(
     node
 }
 
-/// 2^e as an `f32` (e within [MIN_EXP, MAX_EXP]).
-fn scale(e: i32) -> f32 {
-    f32::from_bits(((e + 127) as u32) << 23)
-}
-
-/// The coordinate the kernel decodes, as a device that keeps subnormals
-/// and as one that flushes them (the two differ only for subnormals).
-fn decoded(origin: f32, s: f32, q: u8) -> [f32; 2] {
-    let x = origin + f32::from(q) * s;
-    let flushed = if x.is_subnormal() { 0.0 } else { x };
-    [x, flushed]
-}
-
-/// The smallest exponent whose 255 steps reach `hi` from `origin`.
-fn exponent(origin: f32, hi: f32) -> i32 {
-    let step = (f64::from(hi) - f64::from(origin)) / 255.0;
-    let mut e = if step > 0.0 {
-        // ⌈log2(step)⌉ from the bits (step is a normal f64 here).
-        let bits = step.to_bits();
-        let e = ((bits >> 52) & 0x7ff) as i32 - 1023;
-        (e + i32::from(bits & ((1 << 52) - 1) != 0)).clamp(MIN_EXP, MAX_EXP)
+/// The exponent `e` of the grid `k·2^e` a record's axis is quantised on:
+/// fine enough that 253 steps span `[lo, hi]` (the origin may lie up to one
+/// step below `lo`), and coarse enough that every point of the grid within
+/// reach (|k| < 2^24) is an `f32`, so the kernel's `origin + q·2^e` is
+/// exact: no rounding, no subnormals (2^e is normal), the same on every
+/// device, with or without fused multiply-add.
+fn grid_exponent(lo: f64, hi: f64) -> i32 {
+    // 253 rather than 254 steps: margin for the rounding of `hi - lo`.
+    let fine = if hi > lo {
+        ceil_log2((hi - lo) / 253.0)
     } else {
         MIN_EXP
     };
-    while e < MAX_EXP && decoded(origin, scale(e), 255).iter().any(|&x| x < hi) {
-        e += 1;
-    }
-    e
+    // |lo|, |hi| < 2^(m + 1) ≤ 2^22 · 2^e: with the origin one step out and
+    // 255 steps on, every grid point reached stays below 2^24 · 2^e.
+    let magnitude = lo.abs().max(hi.abs());
+    let coarse = if magnitude > 0.0 {
+        ((magnitude.to_bits() >> 52) as i32 - 1023) - 21
+    } else {
+        MIN_EXP
+    };
+    fine.max(coarse).clamp(MIN_EXP, MAX_EXP)
 }
 
-/// Steps (of 2^e) from `origin` to `x`, a non-negative f64 (exact: the
-/// scale is a power of two).
-fn steps(origin: f32, e: i32, x: f32) -> f64 {
-    let inv = f64::from_bits(((1023 - e) as u64) << 52);
-    (f64::from(x) - f64::from(origin)) * inv
+/// ⌈log2 x⌉ for a positive normal `x`, from its bits.
+fn ceil_log2(x: f64) -> i32 {
+    let bits = x.to_bits();
+    let e = ((bits >> 52) & 0x7ff) as i32 - 1023;
+    e + i32::from(bits & ((1 << 52) - 1) != 0)
 }
 
-/// The largest step whose decoded value is at most `lo` (≥ origin).
-fn lower(origin: f32, e: i32, lo: f32) -> u8 {
-    // Truncation is the floor here: the value is not negative.
-    let mut q = steps(origin, e, lo).min(255.0) as u8;
-    let s = scale(e);
-    while q > 0 && decoded(origin, s, q).iter().any(|&x| x > lo) {
-        q -= 1;
+/// ⌊x⌋ for |x| < 2^62 (the target may lack a rounding instruction, which
+/// makes `f64::floor` a library call).
+fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x {
+        t - 1.0
+    } else {
+        t
     }
-    q
-}
-
-/// The smallest step whose decoded value is at least `hi`.
-fn upper(origin: f32, e: i32, hi: f32) -> u8 {
-    let v = steps(origin, e, hi).min(255.0);
-    let mut q = v as u8;
-    if f64::from(q) < v {
-        q += 1;
-    }
-    let s = scale(e);
-    while q < 255 && decoded(origin, s, q).iter().any(|&x| x < hi) {
-        q += 1;
-    }
-    q
 }
 
 /// The boxes (lower, upper corner) of a record's two children, decoded
@@ -228,6 +205,13 @@ mod tests {
 
     fn contains(outer: ([f32; 3], [f32; 3]), inner: ([f32; 3], [f32; 3])) -> bool {
         (0..3).all(|a| outer.0[a] <= inner.0[a] && outer.1[a] >= inner.1[a])
+    }
+
+    fn aabb(b: ([f32; 3], [f32; 3])) -> Aabb {
+        Aabb {
+            min: DVec3::from_array(b.0.map(f64::from)),
+            max: DVec3::from_array(b.1.map(f64::from)),
+        }
     }
 
     fn flushed(b: ([f32; 3], [f32; 3])) -> ([f32; 3], [f32; 3]) {
@@ -275,7 +259,7 @@ mod tests {
         /// the device flushes subnormals.
         #[test]
         fn decoded_boxes_contain_the_exact_ones(l in boxed(), r in boxed()) {
-            let node = quantise(l, Some(r), 0, 0);
+            let node = quantise(aabb(l), Some(aabb(r)), 0, 0);
             let [dl, dr] = decode(&node);
             prop_assert!(contains(dl, l), "{dl:?} !⊇ {l:?}");
             prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
@@ -287,15 +271,20 @@ mod tests {
 
     #[test]
     fn quantisation_is_tight_for_ordinary_boxes() {
-        // Children spanning half their parent each lose at most one step
-        // (1/255 of the parent's extent) per side.
-        let l = ([0.0, 0.0, 0.0], [0.5, 1.0, 1.0]);
-        let r = ([0.5, 0.0, 0.0], [1.0, 1.0, 1.0]);
-        let [dl, dr] = decode(&quantise(l, Some(r), 0, 0));
-        for (d, e) in [(dl, l), (dr, r)] {
-            for a in 0..3 {
-                assert!(e.0[a] - d.0[a] <= 1.0 / 255.0 + 1e-6, "{d:?} vs {e:?}");
-                assert!(d.1[a] - e.1[a] <= 1.0 / 255.0 + 1e-6, "{d:?} vs {e:?}");
+        // Away from huge coordinates a step is below 2/254 of the parent's
+        // extent (the smallest power of two above 1/254 of it), and a
+        // decoded side is at most one step out.
+        let boxes = random_boxes(2000);
+        for pair in boxes.chunks(2) {
+            let (l, r) = (pair[0].outward_f32(), pair[1].outward_f32());
+            let [dl, dr] = decode(&quantise(aabb(l), Some(aabb(r)), 0, 0));
+            for (d, e) in [(dl, l), (dr, r)] {
+                for a in 0..3 {
+                    let extent = l.1[a].max(r.1[a]) - l.0[a].min(r.0[a]);
+                    let step = extent * 2.0 / 254.0;
+                    assert!(e.0[a] - d.0[a] <= step, "{d:?} vs {e:?}");
+                    assert!(d.1[a] - e.1[a] <= step, "{d:?} vs {e:?}");
+                }
             }
         }
     }
@@ -327,9 +316,9 @@ mod tests {
     fn records_reach_every_primitive_once_inside_their_boxes() {
         let boxes = random_boxes(5000);
         let bvh = Bvh::build(&boxes);
-        let f32_box = |i: usize| bvh.nodes[i].bounds().outward_f32();
+        let f32_box = |i: usize| (bvh.nodes[i].min, bvh.nodes[i].max);
         let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, f32_box, &mut prims);
+        let records = encode(&bvh, |i| bvh.nodes[i].bounds(), &mut prims);
         let interior = bvh.nodes.iter().filter(|n| n.count == 0).count();
         assert_eq!(records.len(), interior);
         let mut seen = vec![0u32; boxes.len()];
@@ -370,7 +359,7 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         assert_eq!(bvh.nodes.len(), 1);
         let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, |i| bvh.nodes[i].bounds().outward_f32(), &mut prims);
+        let records = encode(&bvh, |i| bvh.nodes[i].bounds(), &mut prims);
         assert_eq!(records.len(), 1);
         assert_eq!((records[0].left, records[0].right), (LEAF, NONE));
         assert_eq!(prims[1] & PRIM_LAST, PRIM_LAST);
