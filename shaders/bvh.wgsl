@@ -35,8 +35,8 @@ const BOX_MISS: f32 = 3.4e38;
 @group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
 
 // Entry distances of a record's two children (BOX_MISS where missed). The
-// decoded corners are exact f32 values that contain the children: q * 2^e
-// is exact, and the encoder replayed the one rounding, the addition.
+// decoding is exact: the encoder put every corner on a grid of f32 values
+// (origin + q * 2^e, no rounding), below or above the child's box.
 fn child_entries(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> vec2<f32> {
     let e = vec3<u32>(node.exponents, node.exponents >> 8u, node.exponents >> 16u);
     let step = bitcast<vec3<f32>>((e & vec3<u32>(255u)) << vec3<u32>(23u));
