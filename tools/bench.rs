@@ -180,6 +180,21 @@ pub struct TrianglePoint {
     pub bvh_bytes: usize,
     pub rays: u64,
     pub render_ms: Stat,
+    /// The largest mesh only: its BVH builds, the one before its frames and
+    /// more after them (`GpuScene::build_bvh` on fresh layouts): one build
+    /// is too noisy to compare with a frame.
+    #[serde(default)]
+    pub bvh_rebuild_ms: Option<Stat>,
+}
+
+impl TrianglePoint {
+    /// The BVH build time to compare with a frame: the median of the
+    /// repeated builds where there are some.
+    pub fn build_ms(&self) -> f64 {
+        self.bvh_rebuild_ms
+            .as_ref()
+            .map_or(self.bvh_build_ms, |b| b.median)
+    }
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
@@ -598,6 +613,18 @@ fn part_scaling(args: &Args) -> anyhow::Result<ScalingPart> {
             5
         };
         let (render, last) = frames(&mut r, &up, k, up.size(), 1, reps)?;
+        let bvh_rebuild_ms = if Some(&t) == targets.last() {
+            let mut builds = vec![ms(bvh_build)];
+            for _ in 0..if args.quick { 2 } else { 6 } {
+                let mut g = GpuScene::new(&scene);
+                let t0 = Instant::now();
+                g.build_bvh();
+                builds.push(ms(t0.elapsed()));
+            }
+            Some(Stat::of(&builds))
+        } else {
+            None
+        };
         eprintln!(
             "  scaling: {} triangles: build {:.0} ms, render {:.1} ms",
             scene.triangle_count(),
@@ -614,6 +641,7 @@ fn part_scaling(args: &Args) -> anyhow::Result<ScalingPart> {
             bvh_bytes: last.stats.bvh_bytes,
             rays: last.stats.rays(),
             render_ms: Stat::of(&render),
+            bvh_rebuild_ms,
         });
     }
     let reps = if args.quick { 2 } else { 5 };
