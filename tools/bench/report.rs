@@ -283,14 +283,17 @@ pub fn markdown(r: &Results) -> String {
             format!("{:.1} ms", t.bvh_build_ms)
         }),
         ("Layout + upload", |t| format!("{:.1} ms", t.upload_ms)),
-        ("BVH nodes / depth / memory", |t| {
-            format!(
-                "{} / {} / {}",
-                int(t.bvh_nodes as u64),
-                t.bvh_depth,
-                mib(t.bvh_bytes)
-            )
-        }),
+        (
+            "BVH records (one per interior node) / depth / memory",
+            |t| {
+                format!(
+                    "{} / {} / {}",
+                    int(t.bvh_nodes as u64),
+                    t.bvh_depth,
+                    mib(t.bvh_bytes)
+                )
+            },
+        ),
         ("naga: WGSL → SPIR-V", |t| format!("{:.1} ms", t.naga_ms)),
         ("vkCreateComputePipelines", |t| {
             format!("{:.1} ms", t.pipeline_ms)
@@ -360,7 +363,7 @@ pub fn markdown(r: &Results) -> String {
     );
     let _ = writeln!(
         o,
-        "| Triangles | Render ms/frame, median [min–max] | Mrays/s | BVH build | Layout + upload | BVH nodes | Depth | BVH memory | Bytes/triangle |\n|---|---|---|---|---|---|---|---|---|"
+        "| Triangles | Render ms/frame, median [min–max] | Mrays/s | BVH build | Layout + upload | BVH records | Depth | BVH memory | Bytes/triangle |\n|---|---|---|---|---|---|---|---|---|"
     );
     for t in &sc.triangles {
         let _ = writeln!(
