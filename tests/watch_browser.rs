@@ -169,6 +169,9 @@ impl Browser {
             }
             return JSON.stringify({
                 version: img.dataset.version || null,
+                // The latest image the server announced (the page's own
+                // variable); `version` catches up once it has loaded.
+                announced: typeof shown === 'undefined' ? null : String(shown),
                 px,
                 error: err.hidden ? null : err.textContent,
                 line: document.getElementById('line').textContent,
@@ -238,11 +241,15 @@ fn the_live_page_follows_edits_and_shows_errors() {
         fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
     )
     .unwrap();
-    // The full image, not the preview before it: otherwise the full one can
-    // still arrive after the error below and change the version.
+    // The reload's last image: its timing line is published after all of
+    // its images, and the page must show the latest one it was told of
+    // (else the full image can replace the preview after the error below).
     let edited = b.wait("the edited image", |v| {
         px(v).is_some_and(|c| c[0] == 0)
-            && v["line"].as_str().is_some_and(|l| l.contains("full 64x48"))
+            && v["line"]
+                .as_str()
+                .is_some_and(|l| l.contains("shaders (shading/shader.wgsl)"))
+            && v["version"] == v["announced"]
     });
     assert_ne!(edited["version"].as_str().unwrap(), v0);
     assert!(edited["error"].is_null(), "{edited}");

@@ -268,7 +268,13 @@ const PAGE: &str = r#"<!doctype html>
     const d = JSON.parse(e.data);
     if (d.version > 0 && d.version !== shown) {
       const next = new Image();
-      next.onload = () => { image.src = next.src; image.dataset.version = d.version; };
+      // Loads can finish out of order: never go back to an older image.
+      next.onload = () => {
+        if (d.version > Number(image.dataset.version || 0)) {
+          image.src = next.src;
+          image.dataset.version = d.version;
+        }
+      };
       next.src = '/image.png?v=' + d.version;
       shown = d.version;
     }
