@@ -826,30 +826,31 @@ fn sort_small(order: &mut [Prim], axis: usize) {
     }
 }
 
+/// Random boxes for tests (a small LCG: deterministic, no dependency).
+#[cfg(test)]
+pub(crate) fn random_boxes(n: usize, seed: u64) -> Vec<Aabb> {
+    let mut s = seed;
+    let mut next = move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            let c = DVec3::new(next(), next(), next()) * 100.0 - 50.0;
+            let h = DVec3::new(next(), next(), next()) * 2.0;
+            Aabb {
+                min: c - h,
+                max: c + h,
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn random_boxes(n: usize, seed: u64) -> Vec<Aabb> {
-        // Small LCG: deterministic, no dependency.
-        let mut s = seed;
-        let mut next = move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                let c = DVec3::new(next(), next(), next()) * 100.0 - 50.0;
-                let h = DVec3::new(next(), next(), next()) * 2.0;
-                Aabb {
-                    min: c - h,
-                    max: c + h,
-                }
-            })
-            .collect()
-    }
 
     /// Checks the structural invariants and returns the leaves' total size.
     fn check(bvh: &Bvh, boxes: &[Aabb], node: usize, depth: usize) -> usize {

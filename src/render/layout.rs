@@ -623,6 +623,56 @@ mod tests {
         }
     }
 
+    /// Every constant the host and the kernel both use has the same value
+    /// in both (the WGSL `const`s, read back through naga).
+    #[test]
+    fn shared_constants_match_wgsl() {
+        use crate::render::quantised_bvh::{LEAF, NONE, PRIM_LAST};
+        let source = crate::render::compile::ShaderSource::Embedded
+            .assemble()
+            .unwrap();
+        let module = naga::front::wgsl::parse_str(&source.text).unwrap();
+        let shared = [
+            ("PRIM_SPHERE", PRIM_SPHERE),
+            ("PRIM_LAST", PRIM_LAST),
+            ("BVH_LEAF", LEAF),
+            ("BVH_NONE", NONE),
+            ("NO_NORMALS", NO_NORMALS),
+            ("FLAG_WARM_UP", FLAG_WARM_UP),
+            ("SHADER_PHONG", SHADER_PHONG),
+            ("SHADER_BLINN_PHONG", SHADER_BLINN_PHONG),
+            ("SHADER_CHECKER", SHADER_CHECKER),
+            ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+            ("LIGHT_POINT", LIGHT_POINT),
+            ("LIGHT_SPOT", LIGHT_SPOT),
+            ("LIGHT_RECT", LIGHT_RECT),
+            ("LIGHT_SPHERE", LIGHT_SPHERE),
+        ];
+        for (name, host) in shared {
+            let (_, c) = module
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("const {name} not found in the shaders"));
+            let naga::Expression::Literal(naga::Literal::U32(wgsl)) =
+                module.global_expressions[c.init]
+            else {
+                panic!("{name} is not a u32 literal");
+            };
+            assert_eq!(wgsl, host, "{name}");
+        }
+        // PRIM_INDEX masks off exactly the two flag bits.
+        let prim_index = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some("PRIM_INDEX"))
+            .map(|(_, c)| &module.global_expressions[c.init]);
+        assert!(matches!(
+            prim_index,
+            Some(naga::Expression::Literal(naga::Literal::U32(m))) if *m == !(PRIM_SPHERE | PRIM_LAST)
+        ));
+    }
+
     #[test]
     fn checker_offset_keeps_parity_far_away() {
         use crate::scene::Checker;

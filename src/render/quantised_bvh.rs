@@ -10,7 +10,7 @@
 //! step made five: the node's index and count, then each child's two box
 //! corners. A record here makes three: the frame and its scales, the twelve
 //! steps, the two child references; decoding them is cheap vector
-//! arithmetic. The bunny frame takes 0.93× the CPU time this way
+//! arithmetic. The bunny frame takes 0.94× the CPU time this way
 //! (docs/bench.md §6), and the nodes take 48 bytes per interior node instead
 //! of 32 per node, 0.75× the memory.
 //!
@@ -40,9 +40,9 @@ const MIN_EXP: i32 = -118;
 /// Largest scale exponent (biased 254, the largest finite one).
 const MAX_EXP: i32 = 127;
 
-/// Encodes a built hierarchy whose node boxes (`f32`, as the GPU sees them)
-/// `bounds(i)` gives for node `i`: one record per interior node, the root's
-/// first. The root's own box is never tested (its children's boxes lie
+/// Encodes a built hierarchy: one record per interior node, the root's
+/// first, each child's decoded box containing `bounds(child)` (the node's
+/// box with whatever padding the caller wants). The root's own box is never tested (its children's boxes lie
 /// inside it, so that test would only cost a step). A tree that is a single
 /// leaf gets one record with that leaf on the left and [`NONE`] on the
 /// right. `prims` are the tree's primitive references; the last of each
@@ -178,30 +178,29 @@ fn floor(x: f64) -> f64 {
     }
 }
 
-/// The boxes (lower, upper corner) of a record's two children, decoded
-/// with exactly the arithmetic of `shaders/bvh.wgsl`.
-#[inline]
-pub fn decode(node: &BvhNode) -> [([f32; 3], [f32; 3]); 2] {
-    let q = node.quantised;
-    let step = |k: usize| ((q[k / 4] >> (8 * (k % 4))) & 0xff) as f32;
-    let mut out = [([0.0; 3], [0.0; 3]); 2];
-    for axis in 0..3 {
-        let s = f32::from_bits(((node.exponents >> (8 * axis)) & 0xff) << 23);
-        let o = node.origin[axis];
-        for (k, b) in out.iter_mut().enumerate() {
-            b.0[axis] = o + step(6 * k + axis) * s;
-            b.1[axis] = o + step(6 * k + 3 + axis) * s;
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bvh::Aabb;
     use glam::DVec3;
     use proptest::prelude::*;
+
+    /// The boxes (lower, upper corner) of a record's two children, decoded
+    /// with exactly the arithmetic of `shaders/bvh.wgsl`.
+    fn decode(node: &BvhNode) -> [([f32; 3], [f32; 3]); 2] {
+        let q = node.quantised;
+        let step = |k: usize| ((q[k / 4] >> (8 * (k % 4))) & 0xff) as f32;
+        let mut out = [([0.0; 3], [0.0; 3]); 2];
+        for axis in 0..3 {
+            let s = f32::from_bits(((node.exponents >> (8 * axis)) & 0xff) << 23);
+            let o = node.origin[axis];
+            for (k, b) in out.iter_mut().enumerate() {
+                b.0[axis] = o + step(6 * k + axis) * s;
+                b.1[axis] = o + step(6 * k + 3 + axis) * s;
+            }
+        }
+        out
+    }
 
     fn contains(outer: ([f32; 3], [f32; 3]), inner: ([f32; 3], [f32; 3])) -> bool {
         (0..3).all(|a| outer.0[a] <= inner.0[a] && outer.1[a] >= inner.1[a])
@@ -274,7 +273,7 @@ mod tests {
         // Away from huge coordinates a step is below 2/254 of the parent's
         // extent (the smallest power of two above 1/254 of it), and a
         // decoded side is at most one step out.
-        let boxes = random_boxes(2000);
+        let boxes = crate::bvh::random_boxes(2000, 12345);
         for pair in boxes.chunks(2) {
             let (l, r) = (pair[0].outward_f32(), pair[1].outward_f32());
             let [dl, dr] = decode(&quantise(aabb(l), Some(aabb(r)), 0, 0));
@@ -289,32 +288,12 @@ mod tests {
         }
     }
 
-    fn random_boxes(n: usize) -> Vec<Aabb> {
-        let mut seed = 12345u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                let c = DVec3::new(next(), next(), next()) * 100.0 - 50.0;
-                let h = DVec3::new(next(), next(), next()) * 2.0;
-                Aabb {
-                    min: c - h,
-                    max: c + h,
-                }
-            })
-            .collect()
-    }
-
     /// Walks the records from the root's: every primitive sits in
     /// exactly one leaf, every leaf's references end with one PRIM_LAST, and
     /// every decoded box contains the node's exact box.
     #[test]
     fn records_reach_every_primitive_once_inside_their_boxes() {
-        let boxes = random_boxes(5000);
+        let boxes = crate::bvh::random_boxes(5000, 12345);
         let bvh = Bvh::build(&boxes);
         let f32_box = |i: usize| (bvh.nodes[i].min, bvh.nodes[i].max);
         let mut prims = bvh.prims.clone();
@@ -355,7 +334,7 @@ mod tests {
 
     #[test]
     fn a_single_leaf_tree_gets_one_record() {
-        let boxes = random_boxes(2);
+        let boxes = crate::bvh::random_boxes(2, 12345);
         let bvh = Bvh::build(&boxes);
         assert_eq!(bvh.nodes.len(), 1);
         let mut prims = bvh.prims.clone();

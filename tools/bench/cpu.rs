@@ -11,8 +11,8 @@
 //! choices differ from the kernel's because the kernel's would make this
 //! port slower, and the target is to beat the port at its best: it traverses
 //! the tree's exact `f32` node boxes, not the kernel's quantised records
-//! (decoding them made the port 1.8× slower: 173.4 ms a bunny frame at
-//! commit f2db9cc), and shadow rays visit the left child first, not the
+//! (decoding them made the port 1.5× slower: 173.4 against 114 ms a bunny
+//! frame, commits f2db9cc and b034ab0), and shadow rays visit the left child first, not the
 //! nearer one (1.2× slower: 114 against 93 ms, commits b034ab0 and 2449016,
 //! bench's `cpu` part) — while both made lavapipe faster (docs/bench.md §6).
 //! Neither changes a result: same hits, same shadow-ray outcomes. The same primary
