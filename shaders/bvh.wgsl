@@ -6,7 +6,7 @@
 // PRIM_SPHERE set; the leaf's last entry has PRIM_LAST set. Record 0 is the
 // root's (the root's own box is never tested: its children's lie inside).
 
-// Mirrored by render::layout::BvhNode.
+// Mirrored by render::layout::BvhNode; fetched by bvh_record.
 struct BvhNode {
     // Frame: lower corner, and per axis the biased exponent of one step.
     origin: vec3<f32>,
@@ -30,9 +30,37 @@ const BVH_NONE: u32 = 0xffffffffu;
 // bvh::MAX_DEPTH: the tree is never deeper, so the stack cannot overflow.
 const BVH_STACK: u32 = 64u;
 const BOX_MISS: f32 = 3.4e38;
+// vulkan::TEXEL_ROW and its base-2 logarithm.
+const TEXEL_ROW: u32 = 4096u;
+const TEXEL_ROW_SHIFT: u32 = 12u;
+// 16-byte texels per record (48 bytes).
+const BVH_RECORD_TEXELS: u32 = 3u;
 
-@group(0) @binding(9) var<storage, read> bvh_nodes: array<BvhNode>;
+// Records are texels (three each) rather than a storage buffer: on lavapipe a
+// texel fetch is straight-line SIMD code, a storage-buffer load at a per-lane
+// address a loop over the lanes (src/vulkan/image.rs).
+@group(0) @binding(9) var bvh_nodes: texture_2d<u32>;
 @group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
+
+// Texel `i` of a texel image (vulkan::TEXEL_ROW texels a row).
+fn texel(i: u32) -> vec2<u32> {
+    return vec2<u32>(i & (TEXEL_ROW - 1u), i >> TEXEL_ROW_SHIFT);
+}
+
+// Record `i`, from its texels: the struct's words in order.
+fn bvh_record(i: u32) -> BvhNode {
+    let base = i * BVH_RECORD_TEXELS;
+    let a = textureLoad(bvh_nodes, texel(base), 0);
+    let b = textureLoad(bvh_nodes, texel(base + 1u), 0);
+    let c = textureLoad(bvh_nodes, texel(base + 2u), 0);
+    var node: BvhNode;
+    node.origin = bitcast<vec3<f32>>(a.xyz);
+    node.exponents = a.w;
+    node.quantised = b.xyz;
+    node.left = b.w;
+    node.right = c.x;
+    return node;
+}
 
 // Entry distances of a record's two children (BOX_MISS where missed). The
 // decoding is exact: the encoder put every corner on a grid of f32 values
@@ -110,7 +138,7 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
                 leaf = true;
                 break;
             }
-            let record = bvh_nodes[node];
+            let record = bvh_record(node);
             let t = child_entries(record, ray.origin, inv_dir, (*hit).t);
             let left_first = t.x <= t.y;
             let near_t = select(t.y, t.x, left_first);
@@ -160,7 +188,7 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
     var node = 0u;
     loop {
         if (node & BVH_LEAF) == 0u {
-            let record = bvh_nodes[node];
+            let record = bvh_record(node);
             let t = child_entries(record, ray.origin, inv_dir, t_max);
             let hit_left = t.x < BOX_MISS;
             let hit_right = t.y < BOX_MISS;

@@ -115,7 +115,7 @@ fn limits_are_enforced() {
         .unwrap();
     let storage = ctx.create_buffer("s", BufferUsage::Storage, 64).unwrap();
     let uniform = ctx.create_buffer("u", BufferUsage::Uniform, 16).unwrap();
-    let buffers = [&storage, &storage, &uniform];
+    let buffers: [Resource; 3] = [(&storage).into(), (&storage).into(), (&uniform).into()];
     let push = [0u8; 8];
 
     let over = limits.max_compute_work_group_count[0].checked_add(1);
@@ -130,7 +130,7 @@ fn limits_are_enforced() {
         matches!(err, Some(VulkanError::InvalidArgument(_))),
         "{err:?}"
     );
-    let wrong_usage = [&storage, &storage, &storage];
+    let wrong_usage: [Resource; 3] = [(&storage).into(), (&storage).into(), (&storage).into()];
     let err = ctx
         .dispatch(&pipeline, &wrong_usage, &push, [1, 1, 1])
         .err();
@@ -189,7 +189,12 @@ fn limits_are_enforced() {
         "{err:?}"
     );
     let err = other
-        .dispatch(&pipeline, &[&foreign, &foreign, &uniform], &push, [1, 1, 1])
+        .dispatch(
+            &pipeline,
+            &[(&foreign).into(), (&foreign).into(), (&uniform).into()],
+            &push,
+            [1, 1, 1],
+        )
         .err();
     assert!(
         matches!(err, Some(VulkanError::InvalidArgument(_))),
@@ -286,4 +291,114 @@ fn validation_errors_are_reported() {
     }
     // Reading the errors clears them.
     ctx.check_validation().unwrap();
+}
+
+/// Texel images: every texel reads back through `textureLoad` at the
+/// coordinates the renderer's kernel computes (`i % TEXEL_ROW`,
+/// `i / TEXEL_ROW`), across a row boundary and in the zero-padded tail; an
+/// empty image still binds; and bad sizes and mismatched bindings are errors.
+#[test]
+fn texel_image_round_trip() {
+    const KERNEL: &str = r#"
+@group(0) @binding(0) var texels: texture_2d<u32>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4<u32>>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&output) { return; }
+    output[i] = textureLoad(texels, vec2<u32>(i % 4096u, i / 4096u), 0);
+}
+"#;
+    assert_eq!(
+        TEXEL_ROW, 4096,
+        "the kernel above hard-codes the row length"
+    );
+    let ctx = context();
+    let bindings = [BindingType::TexelImage, BindingType::StorageReadWrite];
+    let pipeline = ctx
+        .create_compute_pipeline(&common::compile(KERNEL), "main", &bindings, 0)
+        .unwrap();
+    // One and a half rows of texels, then half a row of the padding.
+    let texels = TEXEL_ROW as usize * 3 / 2;
+    let read = texels + TEXEL_ROW as usize / 2;
+    let data = common::pattern(texels * TEXEL_BYTES);
+    let image = ctx.create_texel_image("pattern", &data).unwrap();
+    assert_eq!(image.texels(), texels as u64);
+    assert_eq!(image.label(), "pattern");
+    assert_eq!(image.size(), 2 * TEXEL_ROW as u64 * TEXEL_BYTES as u64);
+    let output = ctx
+        .create_buffer("output", BufferUsage::Storage, (read * TEXEL_BYTES) as u64)
+        .unwrap();
+    let groups = (read as u32).div_ceil(64);
+    ctx.dispatch(
+        &pipeline,
+        &[(&image).into(), (&output).into()],
+        &[],
+        [groups, 1, 1],
+    )
+    .unwrap();
+    let got = ctx.read_buffer(&output).unwrap();
+    assert_eq!(&got[..data.len()], &data[..], "stored texels");
+    assert!(got[data.len()..].iter().all(|&b| b == 0), "padding reads 0");
+
+    let empty = ctx.create_texel_image("empty", &[]).unwrap();
+    assert_eq!(empty.texels(), 0);
+    ctx.dispatch(
+        &pipeline,
+        &[(&empty).into(), (&output).into()],
+        &[],
+        [1, 1, 1],
+    )
+    .unwrap();
+    assert!(ctx.read_buffer(&output).unwrap()[..16]
+        .iter()
+        .all(|&b| b == 0));
+
+    let err = ctx.create_texel_image("odd", &[0u8; 20]).err();
+    assert!(
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("'odd'")),
+        "{err:?}"
+    );
+    // A buffer where the pipeline wants an image, and the other way round.
+    let err = ctx
+        .dispatch(
+            &pipeline,
+            &[(&output).into(), (&output).into()],
+            &[],
+            [1, 1, 1],
+        )
+        .err();
+    assert!(
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 0 is TexelImage")),
+        "{err:?}"
+    );
+    let err = ctx
+        .dispatch(
+            &pipeline,
+            &[(&image).into(), (&image).into()],
+            &[],
+            [1, 1, 1],
+        )
+        .err();
+    assert!(
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 1 is StorageReadWrite")),
+        "{err:?}"
+    );
+    // An image of another context is rejected.
+    let other = context();
+    let foreign = other.create_texel_image("foreign", &data).unwrap();
+    let err = ctx
+        .dispatch(
+            &pipeline,
+            &[(&foreign).into(), (&output).into()],
+            &[],
+            [1, 1, 1],
+        )
+        .err();
+    assert!(
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("'foreign'")),
+        "{err:?}"
+    );
+    ctx.check_validation().unwrap();
+    other.check_validation().unwrap();
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A/B timing of two commits whose host code differs (tools/ab.rs compares
 # shader trees under one binary; a change to the GPU data layout needs two
-# binaries). Builds `ab` at both commits in scratch worktrees, then runs them
+# binaries). Builds `ab` at both commits in scratch worktrees, then runs them,
+# each with its own commit's shaders
 # in turn, A B A B …, each process rendering the scene (3 pairs of frames,
 # --cpu-time: the driver threads' CPU time per frame, which other processes
 # sharing the cores do not inflate), and prints each round's medians, the
@@ -36,16 +37,20 @@ build() { # commit -> path of its ab binary
     echo "$scratch/ab-$sha"
 }
 
-run() { # binary -> median worker-CPU ms per frame of one process
-    (cd "$root" && "$1" "$scene" --b shaders --pairs 3 --cpu-time 2>/dev/null) |
+run() { # binary, shader tree -> median worker-CPU ms per frame of one process
+    (cd "$root" && "$1" "$scene" --b "$2" --pairs 3 --cpu-time 2>/dev/null) |
         awk '/^A: [0-9]/ { print $2 }'
 }
 
 bin_a=$(build "$a")
 bin_b=$(build "$b")
+# Each binary renders with its own commit's shaders (the kernel and the host
+# layout it reads must match).
+shaders_a=$scratch/$(git -C "$root" rev-parse --verify "$a^{commit}")/shaders
+shaders_b=$scratch/$(git -C "$root" rev-parse --verify "$b^{commit}")/shaders
 for ((i = 1; i <= rounds; i++)); do
-    ta=$(run "$bin_a")
-    tb=$(run "$bin_b")
+    ta=$(run "$bin_a" "$shaders_a")
+    tb=$(run "$bin_b" "$shaders_b")
     echo "round $i: A $ta ms, B $tb ms, B/A $(awk -v a="$ta" -v b="$tb" 'BEGIN { printf "%.3f", b / a }')"
 done | tee /dev/stderr | awk '
     { split($0, f, "B/A "); r[NR] = f[2] + 0; split($0, g, " "); ta[NR] = g[4] + 0; tb[NR] = g[7] + 0 }

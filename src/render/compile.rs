@@ -436,8 +436,10 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we
 /// request, no debug info, and no bounds checks of naga's own on buffers
-/// (every index is bounded by the counts in `Globals`; local arrays keep
-/// naga's clamping).
+/// (every index is bounded by the counts in `Globals`) or texel fetches
+/// (every BVH record index comes from the encoder; naga's clamp would cost
+/// lavapipe an image-size call per fetch). Local arrays keep naga's
+/// clamping.
 fn spirv_options() -> naga::back::spv::Options<'static> {
     use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
     naga::back::spv::Options {
@@ -446,7 +448,7 @@ fn spirv_options() -> naga::back::spv::Options<'static> {
         bounds_check_policies: BoundsCheckPolicies {
             index: BoundsCheckPolicy::Restrict,
             buffer: BoundsCheckPolicy::Unchecked,
-            image_load: BoundsCheckPolicy::Restrict,
+            image_load: BoundsCheckPolicy::Unchecked,
             binding_array: BoundsCheckPolicy::Restrict,
         },
         ..Default::default()

@@ -647,7 +647,18 @@ mod tests {
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
+            ("TEXEL_ROW", crate::vulkan::TEXEL_ROW),
+            ("TEXEL_ROW_SHIFT", crate::vulkan::TEXEL_ROW.trailing_zeros()),
+            (
+                "BVH_RECORD_TEXELS",
+                (std::mem::size_of::<BvhNode>() / crate::vulkan::TEXEL_BYTES) as u32,
+            ),
         ];
+        assert!(crate::vulkan::TEXEL_ROW.is_power_of_two());
+        assert_eq!(
+            std::mem::size_of::<BvhNode>() % crate::vulkan::TEXEL_BYTES,
+            0
+        );
         for (name, host) in shared {
             let (_, c) = module
                 .constants

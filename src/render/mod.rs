@@ -16,7 +16,7 @@ use bytemuck::Zeroable;
 use crate::scene::{Features, Scene};
 use crate::vulkan::{
     BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
-    DeviceSelector, VulkanError,
+    DeviceSelector, Resource, TexelImage, VulkanError,
 };
 pub use compile::{
     Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
@@ -41,7 +41,7 @@ const BINDINGS: [BindingType; 14] = [
     BindingType::StorageReadOnly,  // 6 shader nodes
     BindingType::StorageReadWrite, // 7 image
     BindingType::StorageReadWrite, // 8 counters
-    BindingType::StorageReadOnly,  // 9 BVH nodes
+    BindingType::TexelImage,       // 9 BVH nodes
     BindingType::StorageReadOnly,  // 10 BVH primitive references
     BindingType::StorageReadOnly,  // 11 query rays (ray queries only)
     BindingType::StorageReadWrite, // 12 query hits (ray queries only)
@@ -144,7 +144,8 @@ pub struct RenderStats {
     pub bvh_nodes: usize,
     /// BVH depth (root = 0).
     pub bvh_depth: usize,
-    /// Bytes of the BVH on the GPU (nodes and primitive references).
+    /// Bytes of the BVH on the GPU (the records' texel image, padding
+    /// included, and the primitive references).
     pub bvh_bytes: usize,
 }
 
@@ -250,9 +251,36 @@ impl Aovs {
     }
 }
 
+/// What an uploaded scene binds at one binding (as [`BINDINGS`] says).
+enum Bound {
+    Buffer(Buffer),
+    Image(TexelImage),
+}
+
+impl Bound {
+    fn resource(&self) -> Resource<'_> {
+        match self {
+            Bound::Buffer(b) => Resource::Buffer(b),
+            Bound::Image(i) => Resource::Image(i),
+        }
+    }
+
+    /// The buffer, for the bindings [`BINDINGS`] declares as buffers.
+    fn buffer(&self) -> Result<&Buffer, RenderError> {
+        match self {
+            Bound::Buffer(b) => Ok(b),
+            Bound::Image(i) => Err(RenderError::Vulkan(VulkanError::InvalidArgument(format!(
+                "'{}' is a texel image, not a buffer",
+                i.label()
+            )))),
+        }
+    }
+}
+
 /// A scene laid out and uploaded to the device, ready to render.
 pub struct UploadedScene {
-    buffers: Vec<Buffer>,
+    /// One per binding of [`BINDINGS`], in order.
+    bound: Vec<Bound>,
     features: Features,
     kernel: KernelOptions,
     /// The camera position the geometry is relative to.
@@ -359,15 +387,19 @@ impl Renderer {
         let dummies: Vec<_> = BINDINGS
             .iter()
             .map(|b| {
-                let usage = if *b == BindingType::Uniform {
-                    BufferUsage::Uniform
-                } else {
-                    BufferUsage::Storage
-                };
-                self.context.create_buffer("warm-up", usage, 256)
+                let ctx = &self.context;
+                Ok(match b {
+                    BindingType::Uniform => {
+                        Bound::Buffer(ctx.create_buffer("warm-up", BufferUsage::Uniform, 256)?)
+                    }
+                    BindingType::TexelImage => {
+                        Bound::Image(ctx.create_texel_image("warm-up", &[])?)
+                    }
+                    _ => Bound::Buffer(ctx.create_buffer("warm-up", BufferUsage::Storage, 256)?),
+                })
             })
-            .collect::<Result<_, _>>()?;
-        let refs: Vec<_> = dummies.iter().collect();
+            .collect::<Result<_, VulkanError>>()?;
+        let refs: Vec<_> = dummies.iter().map(Bound::resource).collect();
         let push = PushConstants {
             flags: FLAG_WARM_UP,
             ..Zeroable::zeroed()
@@ -446,28 +478,43 @@ impl Renderer {
         } else {
             &gpu.lights[..]
         };
-        let buffers = vec![
-            ctx.create_buffer_with_data(
+        let texels =
+            |label: &str, bytes: &[u8]| ctx.create_texel_image(label, bytes).map(Bound::Image);
+        let b = Bound::Buffer;
+        let bound = vec![
+            b(ctx.create_buffer_with_data(
                 "globals",
                 BufferUsage::Uniform,
                 bytemuck::bytes_of(&gpu.globals),
-            )?,
-            storage("planes", bytemuck::cast_slice(&gpu.planes))?,
-            storage("spheres", bytemuck::cast_slice(&gpu.spheres))?,
-            storage("triangles", bytemuck::cast_slice(&gpu.triangles))?,
-            storage("vertex normals", bytemuck::cast_slice(&gpu.vertex_normals))?,
-            storage("lights", bytemuck::cast_slice(lights))?,
-            storage("shaders", bytemuck::cast_slice(&gpu.shaders))?,
-            ctx.create_buffer("image", BufferUsage::Storage, image_bytes)?,
-            ctx.create_buffer("counters", BufferUsage::Storage, 16)?,
-            storage("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
-            storage("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
+            )?),
+            b(storage("planes", bytemuck::cast_slice(&gpu.planes))?),
+            b(storage("spheres", bytemuck::cast_slice(&gpu.spheres))?),
+            b(storage("triangles", bytemuck::cast_slice(&gpu.triangles))?),
+            b(storage(
+                "vertex normals",
+                bytemuck::cast_slice(&gpu.vertex_normals),
+            )?),
+            b(storage("lights", bytemuck::cast_slice(lights))?),
+            b(storage("shaders", bytemuck::cast_slice(&gpu.shaders))?),
+            b(ctx.create_buffer("image", BufferUsage::Storage, image_bytes)?),
+            b(ctx.create_buffer("counters", BufferUsage::Storage, 16)?),
+            texels("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
+            b(storage(
+                "BVH primitives",
+                bytemuck::cast_slice(&gpu.bvh_prims),
+            )?),
             // Ray-query buffers: placeholders, replaced per Renderer::trace.
-            ctx.create_buffer("query rays", BufferUsage::Storage, 16)?,
-            ctx.create_buffer("query hits", BufferUsage::Storage, 16)?,
+            b(ctx.create_buffer("query rays", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("query hits", BufferUsage::Storage, 16)?),
             // AOV buffer: a placeholder, replaced when AOVs are asked for.
-            ctx.create_buffer("AOVs", BufferUsage::Storage, 16)?,
+            b(ctx.create_buffer("AOVs", BufferUsage::Storage, 16)?),
         ];
+        // The records' image holds whole rows of texels (brute force binds
+        // an empty one, which the BVH's memory does not count).
+        let bvh_bytes = match &bound[9] {
+            Bound::Image(image) if !gpu.bvh_nodes.is_empty() => image.size() as usize,
+            _ => 0,
+        } + std::mem::size_of_val(gpu.bvh_prims.as_slice());
         // First triangle of each triangle-based object, to number AOV
         // primitives within their object.
         let mut next = 0u32;
@@ -485,7 +532,7 @@ impl Renderer {
             })
             .collect();
         Ok(UploadedScene {
-            buffers,
+            bound,
             features: scene.features(),
             kernel: self.kernel,
             eye: scene.camera.position,
@@ -496,8 +543,7 @@ impl Renderer {
             upload: layout + t0.elapsed(),
             bvh_nodes: gpu.bvh_nodes.len(),
             bvh_depth: gpu.bvh_depth,
-            bvh_bytes: std::mem::size_of_val(gpu.bvh_nodes.as_slice())
-                + std::mem::size_of_val(gpu.bvh_prims.as_slice()),
+            bvh_bytes,
         })
     }
 
@@ -597,14 +643,14 @@ impl Renderer {
         } else {
             None
         };
-        let mut refs: Vec<_> = scene.buffers.iter().collect();
+        let mut refs: Vec<_> = scene.bound.iter().map(Bound::resource).collect();
         if let Some(b) = &aov_buffer {
-            refs[13] = b;
+            refs[13] = b.into();
         }
         let pipeline = &self.pipelines[&(features, key_kernel)];
         let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
         let read_counters = || -> Result<[u32; 2], RenderError> {
-            let bytes = ctx.read_buffer(&scene.buffers[8])?;
+            let bytes = ctx.read_buffer(scene.bound[8].buffer()?)?;
             Ok([0, 1].map(|i| {
                 u32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default())
             }))
@@ -659,7 +705,7 @@ impl Renderer {
         }
 
         let t1 = Instant::now();
-        let image_bytes = ctx.read_buffer(&scene.buffers[7])?;
+        let image_bytes = ctx.read_buffer(scene.bound[7].buffer()?)?;
         let n = width as usize * height as usize;
         let mut pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]);
         if passes > 1 {

@@ -4,15 +4,17 @@
 //! on GPUs Through Compressed Wide BVHs", HPG 2017, here for two children).
 //!
 //! Why: lavapipe loads storage-buffer data separately for each of the 8
-//! lanes of a SIMD group (a scalar load, a bounds check and a branch per
-//! lane and vector), so a traversal step costs about as many of those as it
-//! has vector loads. With a node per child (`f32` box, child index, count) a
-//! step made five: the node's index and count, then each child's two box
-//! corners. A record here makes three: the frame and its scales, the twelve
-//! steps, the two child references; decoding them is cheap vector
-//! arithmetic. The bunny frame takes 0.94× the CPU time this way
-//! (docs/bench.md §6), and the nodes take 48 bytes per interior node instead
-//! of 32 per node, 0.75× the memory.
+//! lanes of a SIMD group (a mask test per lane, then a bounds check, a
+//! branch and a scalar load per lane and 32-bit component), so a traversal
+//! step costs about as much as the words it loads. With a node per child
+//! (`f32` box, child index, count) a step loaded 16 words: the node's index
+//! and count, then each child's two box corners. A record here needs 9: the
+//! frame and its scales, the twelve steps, the two child references;
+//! decoding them is cheap vector arithmetic. The bunny frame took 0.94× the
+//! CPU time this way (docs/bench.md §6), and the nodes take 48 bytes per
+//! interior node instead of 32 per node, 0.75× the memory. The kernel now
+//! fetches each record as three texels of a texel image (`vulkan::TexelImage`,
+//! straight-line code on lavapipe), which took another 0.95×.
 //!
 //! Conservative by construction: each axis of a record is quantised on a
 //! grid `k·2^e` coarse enough that every grid point within reach is an

@@ -102,9 +102,9 @@ impl Renderer {
                 BufferUsage::Storage,
                 (chunk.len() * 32) as u64,
             )?;
-            let mut refs: Vec<_> = scene.buffers.iter().collect();
-            refs[11] = &ray_buf;
-            refs[12] = &hit_buf;
+            let mut refs: Vec<_> = scene.bound.iter().map(super::Bound::resource).collect();
+            refs[11] = (&ray_buf).into();
+            refs[12] = (&hit_buf).into();
             let push = PushConstants {
                 size: [chunk.len() as u32, 1],
                 ..Zeroable::zeroed()

@@ -203,9 +203,17 @@ impl Context {
         Ok(())
     }
 
+    /// A host-visible transfer-source buffer holding `data`, for uploads to device memory
+    /// that cannot be mapped (images in optimal tiling).
+    pub(super) fn upload_buffer(&self, label: &str, data: &[u8]) -> Result<Buffer, VulkanError> {
+        let staging = self.allocate(label, Role::Upload, data.len() as u64)?;
+        staging.write_mapped(data)?;
+        Ok(staging)
+    }
+
     /// Index of the first memory type allowed by `type_bits` that has all flags of the earliest
     /// satisfiable preference.
-    fn memory_type(
+    pub(super) fn memory_type(
         &self,
         type_bits: u32,
         preferences: &[vk::MemoryPropertyFlags],

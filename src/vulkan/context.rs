@@ -75,6 +75,8 @@ pub struct DeviceLimits {
     pub max_push_constants_size: u32,
     /// `maxMemoryAllocationSize` (Vulkan 1.1 maintenance3): largest single allocation.
     pub max_memory_allocation_size: u64,
+    /// `maxImageDimension2D`: largest width or height of a 2D image, in texels.
+    pub max_image_dimension_2d: u32,
 }
 
 /// Loader, instance and optional validation messenger; destroyed after the device.
@@ -254,6 +256,7 @@ impl InstanceHolder {
             max_compute_work_group_invocations: l.max_compute_work_group_invocations,
             max_push_constants_size: l.max_push_constants_size,
             max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+            max_image_dimension_2d: l.max_image_dimension2_d,
         };
         let queue_family = queue_family as u32;
         Ok(Some(PhysicalDevice {

@@ -2,6 +2,7 @@
 
 use super::buffer::{Buffer, BufferUsage};
 use super::context::Context;
+use super::image::TexelImage;
 use super::pipeline::{BindingType, ComputePipeline};
 use super::{vk_err, VulkanError};
 use ash::vk;
@@ -39,38 +40,81 @@ pub(crate) unsafe fn memory_barrier(
     unsafe { device.cmd_pipeline_barrier(cmd, src_stage, dst_stage, flags, &barrier, &[], &[]) };
 }
 
+/// What a dispatch binds at one binding of set 0.
+#[derive(Clone, Copy)]
+pub enum Resource<'a> {
+    /// A storage or uniform buffer.
+    Buffer(&'a Buffer),
+    /// A texel image.
+    Image(&'a TexelImage),
+}
+
+impl<'a> From<&'a Buffer> for Resource<'a> {
+    fn from(buffer: &'a Buffer) -> Self {
+        Resource::Buffer(buffer)
+    }
+}
+
+impl<'a> From<&'a TexelImage> for Resource<'a> {
+    fn from(image: &'a TexelImage) -> Self {
+        Resource::Image(image)
+    }
+}
+
+impl Resource<'_> {
+    fn label(&self) -> &str {
+        match self {
+            Resource::Buffer(b) => b.label(),
+            Resource::Image(i) => i.label(),
+        }
+    }
+}
+
 impl Context {
-    /// Binds `buffers[i]` at binding `i` of set 0 (must match the pipeline's bindings in number and
-    /// usage), pushes `push_constants` (len == the pipeline's push_constant_size), dispatches
+    /// Binds `resources[i]` at binding `i` of set 0 (must match the pipeline's bindings in number
+    /// and type), pushes `push_constants` (len == the pipeline's push_constant_size), dispatches
     /// `groups` workgroups, submits and waits for completion. Returns the wall time from submit
     /// to fence signalled.
     pub fn dispatch(
         &self,
         pipeline: &ComputePipeline,
-        buffers: &[&Buffer],
+        resources: &[Resource],
         push_constants: &[u8],
         groups: [u32; 3],
     ) -> Result<Duration, VulkanError> {
-        self.check_dispatch(pipeline, buffers, push_constants, groups)?;
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+        self.check_dispatch(pipeline, resources, push_constants, groups)?;
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
             .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
+            .map(|r| match r {
+                Resource::Buffer(b) => [vk::DescriptorBufferInfo::default()
                     .buffer(b.handle)
-                    .range(vk::WHOLE_SIZE)]
+                    .range(vk::WHOLE_SIZE)],
+                Resource::Image(_) => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
+            .iter()
+            .map(|r| match r {
+                Resource::Image(i) => [vk::DescriptorImageInfo::default()
+                    .image_view(i.view)
+                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
+                Resource::Buffer(_) => [vk::DescriptorImageInfo::default()],
             })
             .collect();
         let writes: Vec<_> = pipeline
             .bindings
             .iter()
-            .zip(&infos)
+            .zip(resources)
             .enumerate()
-            .map(|(i, (binding, info))| {
-                vk::WriteDescriptorSet::default()
+            .map(|(i, (binding, resource))| {
+                let write = vk::WriteDescriptorSet::default()
                     .dst_set(pipeline.set)
                     .dst_binding(i as u32)
-                    .descriptor_type(binding.descriptor_type())
-                    .buffer_info(info)
+                    .descriptor_type(binding.descriptor_type());
+                match resource {
+                    Resource::Buffer(_) => write.buffer_info(&buffer_infos[i]),
+                    Resource::Image(_) => write.image_info(&image_infos[i]),
+                }
             })
             .collect();
         // SAFETY: everything was checked above; the set is updated under the submit lock, while
@@ -102,7 +146,7 @@ impl Context {
     fn check_dispatch(
         &self,
         pipeline: &ComputePipeline,
-        buffers: &[&Buffer],
+        resources: &[Resource],
         push_constants: &[u8],
         groups: [u32; 3],
     ) -> Result<(), VulkanError> {
@@ -110,26 +154,39 @@ impl Context {
         if !Arc::ptr_eq(&pipeline.shared, &self.shared) {
             return invalid("the pipeline belongs to another Vulkan context".into());
         }
-        if buffers.len() != pipeline.bindings.len() {
+        if resources.len() != pipeline.bindings.len() {
             return invalid(format!(
-                "the pipeline has {} bindings but {} buffers were given",
+                "the pipeline has {} bindings but {} resources were given",
                 pipeline.bindings.len(),
-                buffers.len()
+                resources.len()
             ));
         }
-        for (i, (buffer, binding)) in buffers.iter().zip(&pipeline.bindings).enumerate() {
-            self.check_owned(buffer)?;
-            let wanted = match binding {
-                BindingType::Uniform => BufferUsage::Uniform,
-                BindingType::StorageReadOnly | BindingType::StorageReadWrite => {
-                    BufferUsage::Storage
+        for (i, (resource, binding)) in resources.iter().zip(&pipeline.bindings).enumerate() {
+            let given = match resource {
+                Resource::Buffer(buffer) => {
+                    self.check_owned(buffer)?;
+                    format!("{:?} buffer", buffer.usage())
+                }
+                Resource::Image(image) => {
+                    self.check_owned_image(image)?;
+                    "texel image".to_string()
                 }
             };
-            if buffer.usage() != Some(wanted) {
+            let matches = match (binding, resource) {
+                (BindingType::Uniform, Resource::Buffer(b)) => {
+                    b.usage() == Some(BufferUsage::Uniform)
+                }
+                (
+                    BindingType::StorageReadOnly | BindingType::StorageReadWrite,
+                    Resource::Buffer(b),
+                ) => b.usage() == Some(BufferUsage::Storage),
+                (BindingType::TexelImage, Resource::Image(_)) => true,
+                _ => false,
+            };
+            if !matches {
                 return invalid(format!(
-                    "binding {i} is {binding:?} but buffer '{}' was created as {:?}",
-                    buffer.label(),
-                    buffer.usage()
+                    "binding {i} is {binding:?} but '{}' is a {given}",
+                    resource.label()
                 ));
             }
         }

@@ -8,10 +8,13 @@
 mod buffer;
 mod context;
 mod dispatch;
+mod image;
 mod pipeline;
 
 pub use buffer::{Buffer, BufferUsage};
 pub use context::{Context, ContextOptions, DeviceInfo, DeviceLimits, DeviceSelector};
+pub use dispatch::Resource;
+pub use image::{TexelImage, TEXEL_BYTES, TEXEL_ROW};
 pub use pipeline::{BindingType, ComputePipeline};
 
 /// Everything that can go wrong in the Vulkan backend.

@@ -15,6 +15,8 @@ pub enum BindingType {
     StorageReadWrite,
     /// `var<uniform>`: a uniform buffer.
     Uniform,
+    /// `texture_2d<u32>` read with `textureLoad`: a [`super::TexelImage`].
+    TexelImage,
 }
 
 impl BindingType {
@@ -24,6 +26,7 @@ impl BindingType {
                 vk::DescriptorType::STORAGE_BUFFER
             }
             BindingType::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
+            BindingType::TexelImage => vk::DescriptorType::SAMPLED_IMAGE,
         }
     }
 }

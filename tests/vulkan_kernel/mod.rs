@@ -93,7 +93,7 @@ pub fn run_kernel(ctx: &Context) -> Run {
     let groups = N.div_ceil(64);
     ctx.dispatch(
         &pipeline,
-        &[&input, &output, &params],
+        &[(&input).into(), (&output).into(), (&params).into()],
         bytemuck::cast_slice(&push),
         [groups, 1, 1],
     )

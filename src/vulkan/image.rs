@@ -1,0 +1,257 @@
+//! Read-only texel images: arrays of 16-byte records that shaders fetch with `textureLoad`.
+//!
+//! Why images and not storage buffers: lavapipe (Mesa 25.0) loads a storage buffer at a
+//! per-lane address as a loop over the SIMD lanes, with a branch for the lane's mask and one
+//! for the bounds check of every 32-bit component. A texel fetch is straight-line SIMD code
+//! instead (bounds handled by selects, one 16-byte load per lane), so records that every
+//! traversal step reads (BVH nodes, triangles) cost far less as texels (docs/bench.md §6).
+//! On GPUs, fetching BVH data through the texture path is long-standing practice too.
+
+use super::context::{Context, DeviceShared};
+use super::{vk_err, VulkanError};
+use ash::vk;
+use std::sync::Arc;
+
+/// Texels per image row. Record `i` sits at `(i % TEXEL_ROW, i / TEXEL_ROW)`; shaders compute
+/// that with a mask and a shift. 4096 is the smallest `maxImageDimension2D` Vulkan allows.
+pub const TEXEL_ROW: u32 = 4096;
+
+/// Bytes per texel (format `R32G32B32A32_UINT`: four 32-bit words).
+pub const TEXEL_BYTES: usize = 16;
+
+/// A 2D `R32G32B32A32_UINT` sampled image holding an array of texels, row by row, in
+/// `SHADER_READ_ONLY_OPTIMAL` layout (WGSL `texture_2d<u32>`).
+pub struct TexelImage {
+    pub(crate) shared: Arc<DeviceShared>,
+    image: vk::Image,
+    pub(crate) view: vk::ImageView,
+    memory: vk::DeviceMemory,
+    texels: u64,
+    label: String,
+}
+
+impl TexelImage {
+    /// Number of texels the caller stored (the last row is padded with zeros).
+    pub fn texels(&self) -> u64 {
+        self.texels
+    }
+
+    /// The label given at creation, used in error messages.
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
+    /// Bytes of device memory the texels take, padding included.
+    pub fn size(&self) -> u64 {
+        rows(self.texels) as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64
+    }
+}
+
+impl Drop for TexelImage {
+    fn drop(&mut self) {
+        // SAFETY: every submit waits for its fence, so the image is not in use. Null handles
+        // (failed creation) are ignored by Vulkan.
+        unsafe {
+            let device = &self.shared.device;
+            device.destroy_image_view(self.view, None);
+            device.destroy_image(self.image, None);
+            device.free_memory(self.memory, None);
+        }
+    }
+}
+
+/// Image rows for `texels` texels (at least one: Vulkan forbids empty images).
+fn rows(texels: u64) -> u32 {
+    texels.div_ceil(TEXEL_ROW as u64).clamp(1, u32::MAX as u64) as u32
+}
+
+/// The rows of image `label` holding `texels` texels, or the error naming
+/// `maxImageDimension2D` (`max`) when the device allows fewer.
+fn checked_rows(label: &str, texels: u64, max: u32) -> Result<u32, VulkanError> {
+    let height = rows(texels);
+    if height > max {
+        return Err(VulkanError::Limit(format!(
+            "texel image '{label}' needs {height} rows of {TEXEL_ROW} texels ({texels} texels of {TEXEL_BYTES} bytes) but this device's maxImageDimension2D is {max}"
+        )));
+    }
+    Ok(height)
+}
+
+impl Context {
+    /// A texel image holding `data` (a whole number of 16-byte texels; empty data gives one
+    /// row of zeros, so that shaders can always bind something). Fails with
+    /// [`VulkanError::Limit`] naming `maxImageDimension2D` when there are more rows than the
+    /// device allows.
+    pub fn create_texel_image(&self, label: &str, data: &[u8]) -> Result<TexelImage, VulkanError> {
+        if !data.len().is_multiple_of(TEXEL_BYTES) {
+            return Err(VulkanError::InvalidArgument(format!(
+                "texel image '{label}': {} bytes is not a whole number of {TEXEL_BYTES}-byte texels",
+                data.len()
+            )));
+        }
+        let texels = (data.len() / TEXEL_BYTES) as u64;
+        let height = checked_rows(label, texels, self.limits().max_image_dimension_2d)?;
+        let bytes = height as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64;
+        let device = &self.shared.device;
+        let format = vk::Format::R32G32B32A32_UINT;
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width: TEXEL_ROW,
+                height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid create info; the TexelImage below owns (and on error destroys) it.
+        let image = unsafe { device.create_image(&info, None) }.map_err(vk_err("vkCreateImage"))?;
+        let mut result = TexelImage {
+            shared: self.shared.clone(),
+            image,
+            view: vk::ImageView::null(),
+            memory: vk::DeviceMemory::null(),
+            texels,
+            label: label.to_string(),
+        };
+        let requirements = unsafe { device.get_image_memory_requirements(image) };
+        let max_alloc = self.limits().max_memory_allocation_size;
+        if requirements.size > max_alloc {
+            return Err(VulkanError::Limit(format!(
+                "texel image '{label}' needs {} bytes but this device's maxMemoryAllocationSize is {max_alloc}",
+                requirements.size
+            )));
+        }
+        use vk::MemoryPropertyFlags as M;
+        let (type_index, _) = self
+            .memory_type(
+                requirements.memory_type_bits,
+                &[M::DEVICE_LOCAL, M::empty()],
+            )
+            .ok_or_else(|| {
+                VulkanError::Limit(format!("no suitable memory type for texel image '{label}'"))
+            })?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(requirements.size)
+            .memory_type_index(type_index);
+        result.memory = unsafe { device.allocate_memory(&alloc, None) }.map_err(|result| {
+            VulkanError::Limit(format!(
+                "allocating {} bytes for texel image '{label}' failed: {result}",
+                requirements.size
+            ))
+        })?;
+        unsafe { device.bind_image_memory(image, result.memory, 0) }
+            .map_err(vk_err("vkBindImageMemory"))?;
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(range);
+        result.view = unsafe { device.create_image_view(&view_info, None) }
+            .map_err(vk_err("vkCreateImageView"))?;
+
+        // Images in optimal tiling cannot be mapped: upload through a staging buffer.
+        let mut padded = data.to_vec();
+        padded.resize(bytes as usize, 0);
+        let staging = self.upload_buffer(label, &padded)?;
+        let to_transfer = vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image)
+            .subresource_range(range);
+        let to_shader = to_transfer
+            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::SHADER_READ);
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_extent(vk::Extent3D {
+                width: TEXEL_ROW,
+                height,
+                depth: 1,
+            });
+        use vk::PipelineStageFlags as S;
+        let flags = vk::DependencyFlags::empty();
+        // SAFETY: the image, its memory and the staging buffer are valid and idle.
+        self.submit(|device, cmd| unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                S::TOP_OF_PIPE,
+                S::TRANSFER,
+                flags,
+                &[],
+                &[],
+                &[to_transfer],
+            );
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                staging.handle,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            );
+            device.cmd_pipeline_barrier(
+                cmd,
+                S::TRANSFER,
+                S::COMPUTE_SHADER,
+                flags,
+                &[],
+                &[],
+                &[to_shader],
+            );
+        })?;
+        Ok(result)
+    }
+
+    /// Rejects images created by another context (their handles are invalid on this device).
+    pub(crate) fn check_owned_image(&self, image: &TexelImage) -> Result<(), VulkanError> {
+        if Arc::ptr_eq(&image.shared, &self.shared) {
+            return Ok(());
+        }
+        Err(VulkanError::InvalidArgument(format!(
+            "texel image '{}' belongs to another Vulkan context",
+            image.label
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_round_up_and_respect_the_limit() {
+        assert_eq!(checked_rows("a", 0, 1).unwrap(), 1);
+        assert_eq!(checked_rows("a", 1, 1).unwrap(), 1);
+        assert_eq!(checked_rows("a", TEXEL_ROW as u64, 1).unwrap(), 1);
+        assert_eq!(checked_rows("a", TEXEL_ROW as u64 + 1, 2).unwrap(), 2);
+        // 16384 rows is lavapipe's maxImageDimension2D: 2^26 texels, 1 GiB.
+        let full = 16384 * TEXEL_ROW as u64;
+        assert_eq!(checked_rows("a", full, 16384).unwrap(), 16384);
+        match checked_rows("BVH nodes", full + 1, 16384) {
+            Err(VulkanError::Limit(msg)) => {
+                assert!(msg.contains("'BVH nodes'"), "{msg}");
+                assert!(msg.contains("maxImageDimension2D is 16384"), "{msg}");
+                assert!(msg.contains("16385 rows"), "{msg}");
+            }
+            other => panic!("expected a Limit error, got {other:?}"),
+        }
+    }
+}
