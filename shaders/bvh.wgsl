@@ -39,7 +39,7 @@ const BVH_RECORD_TEXELS: u32 = 3u;
 // Records are texels (three each) rather than a storage buffer: on lavapipe a
 // texel fetch is straight-line SIMD code, a storage-buffer load at a per-lane
 // address a loop over the lanes (src/vulkan/image.rs).
-@group(0) @binding(9) var bvh_nodes: texture_2d<u32>;
+@group(0) @binding(9) var bvh_nodes: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
 
 // Texel `i` of a texel image (vulkan::TEXEL_ROW texels a row).
@@ -50,9 +50,9 @@ fn texel(i: u32) -> vec2<u32> {
 // Record `i`, from its texels: the struct's words in order.
 fn bvh_record(i: u32) -> BvhNode {
     let base = i * BVH_RECORD_TEXELS;
-    let a = textureLoad(bvh_nodes, texel(base), 0);
-    let b = textureLoad(bvh_nodes, texel(base + 1u), 0);
-    let c = textureLoad(bvh_nodes, texel(base + 2u), 0);
+    let a = textureLoad(bvh_nodes, texel(base));
+    let b = textureLoad(bvh_nodes, texel(base + 1u));
+    let c = textureLoad(bvh_nodes, texel(base + 2u));
     var node: BvhNode;
     node.origin = bitcast<vec3<f32>>(a.xyz);
     node.exponents = a.w;

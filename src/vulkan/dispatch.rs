@@ -97,7 +97,7 @@ impl Context {
             .map(|r| match r {
                 Resource::Image(i) => [vk::DescriptorImageInfo::default()
                     .image_view(i.view)
-                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
+                    .image_layout(vk::ImageLayout::GENERAL)],
                 Resource::Buffer(_) => [vk::DescriptorImageInfo::default()],
             })
             .collect();

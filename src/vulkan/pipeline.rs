@@ -26,7 +26,7 @@ impl BindingType {
                 vk::DescriptorType::STORAGE_BUFFER
             }
             BindingType::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
-            BindingType::TexelImage => vk::DescriptorType::SAMPLED_IMAGE,
+            BindingType::TexelImage => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
 }
