@@ -75,7 +75,7 @@ fn closest_sphere(i: u32, ray: Ray, hit: ptr<function, Hit>) {
 
 // Records triangle `i` in `hit` if the ray meets it nearer.
 fn closest_triangle(i: u32, ray: Ray, hit: ptr<function, Hit>) {
-    let h = intersect_triangle(triangles[i], ray, (*hit).t);
+    let h = intersect_triangle(triangle(i), ray, (*hit).t);
     if h.x > 0.0 {
         (*hit).found = true;
         (*hit).t = h.x;
@@ -108,7 +108,7 @@ fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
             (*hit).object = sphere.object;
         }
         default: {
-            let tri = triangles[(*hit).index];
+            let tri = triangle((*hit).index);
             ng = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
             ns = triangle_shading_normal(tri, ng, (*hit).u, (*hit).v);
             (*hit).shader = tri.shader;

@@ -97,5 +97,5 @@ fn triangle_blocks(i: u32, ray: Ray, t_max: f32, start: Hit) -> bool {
     if start.kind == KIND_TRIANGLE && start.index == i {
         return false;
     }
-    return intersect_triangle(triangles[i], ray, t_max).x > 0.0;
+    return intersect_triangle(triangle(i), ray, t_max).x > 0.0;
 }

@@ -21,7 +21,21 @@ struct VertexNormals {
 
 const NO_NORMALS: u32 = 0xffffffffu;
 
-@group(0) @binding(3) var<storage, read> triangles: array<Triangle>;
+// Triangle `i`, from its three texels.
+fn triangle(i: u32) -> Triangle {
+    let base = i * 3u;
+    let a = textureLoad(triangles, texel(base));
+    let b = textureLoad(triangles, texel(base + 1u));
+    let c = textureLoad(triangles, texel(base + 2u));
+    return Triangle(
+        bitcast<vec3<f32>>(a.xyz), a.w,
+        bitcast<vec3<f32>>(b.xyz), b.w,
+        bitcast<vec3<f32>>(c.xyz), c.w,
+    );
+}
+
+// Texels, three a triangle, for the reason given at `bvh_nodes`.
+@group(0) @binding(3) var triangles: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(4) var<storage, read> vertex_normals: array<VertexNormals>;
 
 // Which ray/triangle test the kernel uses (render::TriangleTest).

@@ -35,7 +35,7 @@ const BINDINGS: [BindingType; 14] = [
     BindingType::Uniform,          // 0 globals
     BindingType::StorageReadOnly,  // 1 planes
     BindingType::StorageReadOnly,  // 2 spheres
-    BindingType::StorageReadOnly,  // 3 triangles
+    BindingType::TexelImage,       // 3 triangles
     BindingType::StorageReadOnly,  // 4 vertex normals
     BindingType::StorageReadOnly,  // 5 lights
     BindingType::StorageReadOnly,  // 6 shader nodes
@@ -489,7 +489,7 @@ impl Renderer {
             )?),
             b(storage("planes", bytemuck::cast_slice(&gpu.planes))?),
             b(storage("spheres", bytemuck::cast_slice(&gpu.spheres))?),
-            b(storage("triangles", bytemuck::cast_slice(&gpu.triangles))?),
+            texels("triangles", bytemuck::cast_slice(&gpu.triangles))?,
             b(storage(
                 "vertex normals",
                 bytemuck::cast_slice(&gpu.vertex_normals),
