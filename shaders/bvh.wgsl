@@ -30,22 +30,12 @@ const BVH_NONE: u32 = 0xffffffffu;
 // bvh::MAX_DEPTH: the tree is never deeper, so the stack cannot overflow.
 const BVH_STACK: u32 = 64u;
 const BOX_MISS: f32 = 3.4e38;
-// vulkan::TEXEL_ROW and its base-2 logarithm.
-const TEXEL_ROW: u32 = 4096u;
-const TEXEL_ROW_SHIFT: u32 = 12u;
 // 16-byte texels per record (48 bytes).
 const BVH_RECORD_TEXELS: u32 = 3u;
 
-// Records are texels (three each) rather than a storage buffer: on lavapipe a
-// texel fetch is straight-line SIMD code, a storage-buffer load at a per-lane
-// address a loop over the lanes (src/vulkan/image.rs).
+// Records are texels (shaders/texels.wgsl says why).
 @group(0) @binding(9) var bvh_nodes: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
-
-// Texel `i` of a texel image (vulkan::TEXEL_ROW texels a row).
-fn texel(i: u32) -> vec2<u32> {
-    return vec2<u32>(i & (TEXEL_ROW - 1u), i >> TEXEL_ROW_SHIFT);
-}
 
 // Record `i`, from its texels: the struct's words in order.
 fn bvh_record(i: u32) -> BvhNode {

@@ -1,7 +1,7 @@
 // Triangles (single, or from meshes), stored by their three vertices, so
 // that triangles sharing a vertex share its exact bits (watertightness).
 
-// Mirrored by render::layout::Triangle.
+// Mirrored by render::layout::Triangle; fetched by triangle().
 struct Triangle {
     v0: vec3<f32>,
     shader: u32,
@@ -20,10 +20,12 @@ struct VertexNormals {
 }
 
 const NO_NORMALS: u32 = 0xffffffffu;
+// 16-byte texels per triangle (48 bytes).
+const TRIANGLE_TEXELS: u32 = 3u;
 
-// Triangle `i`, from its three texels.
+// Triangle `i`, from its texels: the struct's words in order.
 fn triangle(i: u32) -> Triangle {
-    let base = i * 3u;
+    let base = i * TRIANGLE_TEXELS;
     let a = textureLoad(triangles, texel(base));
     let b = textureLoad(triangles, texel(base + 1u));
     let c = textureLoad(triangles, texel(base + 2u));
@@ -34,7 +36,7 @@ fn triangle(i: u32) -> Triangle {
     );
 }
 
-// Texels, three a triangle, for the reason given at `bvh_nodes`.
+// Texels, TRIANGLE_TEXELS a triangle (shaders/texels.wgsl says why).
 @group(0) @binding(3) var triangles: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(4) var<storage, read> vertex_normals: array<VertexNormals>;
 

@@ -14,6 +14,7 @@ use crate::scene::Features;
 /// declarations are order-independent; the order only fixes line numbers.
 pub const SHADER_FILES: &[&str] = &[
     "render.wgsl",
+    "texels.wgsl",
     "camera.wgsl",
     "ray.wgsl",
     "hit.wgsl",
@@ -36,6 +37,7 @@ pub const SHADER_FILES: &[&str] = &[
 /// source tree.
 const EMBEDDED: &[&str] = &[
     include_str!("../../shaders/render.wgsl"),
+    include_str!("../../shaders/texels.wgsl"),
     include_str!("../../shaders/camera.wgsl"),
     include_str!("../../shaders/ray.wgsl"),
     include_str!("../../shaders/hit.wgsl"),

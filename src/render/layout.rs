@@ -653,12 +653,18 @@ mod tests {
                 "BVH_RECORD_TEXELS",
                 (std::mem::size_of::<BvhNode>() / crate::vulkan::TEXEL_BYTES) as u32,
             ),
+            (
+                "TRIANGLE_TEXELS",
+                (std::mem::size_of::<Triangle>() / crate::vulkan::TEXEL_BYTES) as u32,
+            ),
         ];
         assert!(crate::vulkan::TEXEL_ROW.is_power_of_two());
-        assert_eq!(
-            std::mem::size_of::<BvhNode>() % crate::vulkan::TEXEL_BYTES,
-            0
-        );
+        for size in [
+            std::mem::size_of::<BvhNode>(),
+            std::mem::size_of::<Triangle>(),
+        ] {
+            assert_eq!(size % crate::vulkan::TEXEL_BYTES, 0, "whole texels");
+        }
         for (name, host) in shared {
             let (_, c) = module
                 .constants

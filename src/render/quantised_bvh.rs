@@ -13,8 +13,8 @@
 //! decoding them is cheap vector arithmetic. The bunny frame took 0.94× the
 //! CPU time this way (docs/bench.md §6), and the nodes take 48 bytes per
 //! interior node instead of 32 per node, 0.75× the memory. The kernel now
-//! fetches each record as three texels of a texel image (`vulkan::TexelImage`,
-//! straight-line code on lavapipe), which took another 0.97×.
+//! reads each record as three texels of a read-only storage image
+//! (`vulkan::TexelImage`, straight-line code on lavapipe: docs/bench.md §6).
 //!
 //! Conservative by construction: each axis of a record is quantised on a
 //! grid `k·2^e` coarse enough that every grid point within reach is an

@@ -1,11 +1,14 @@
-//! Read-only texel images: arrays of 16-byte records that shaders fetch with `textureLoad`.
+//! Read-only texel images: arrays of 16-byte records that shaders read with `textureLoad` from
+//! a `texture_storage_2d<rgba32uint, read>`.
 //!
 //! Why images and not storage buffers: lavapipe (Mesa 25.0) loads a storage buffer at a
 //! per-lane address as a loop over the SIMD lanes, with a branch for the lane's mask and one
-//! for the bounds check of every 32-bit component. A texel fetch is straight-line SIMD code
-//! instead (bounds handled by selects, one 16-byte load per lane), so records that every
-//! traversal step reads (BVH nodes, triangles) cost far less as texels (docs/bench.md §6).
-//! On GPUs, fetching BVH data through the texture path is long-standing practice too.
+//! for the bounds check of every 32-bit component. Its storage-image load is straight-line
+//! SIMD code instead (bounds handled by selects, one 16-byte load per lane), so records that
+//! every traversal step or triangle test reads (BVH nodes, triangles) cost far less as texels
+//! (docs/bench.md §6). A storage image rather than a sampled one: lavapipe's sampled fetch
+//! (`texture_2d`) computes a mip level for each lane, which took most of the gain away.
+//! GPUs read such images through their texture path, long-standing practice for BVH data.
 
 use super::context::{Context, DeviceShared};
 use super::{vk_err, VulkanError};
@@ -19,8 +22,8 @@ pub const TEXEL_ROW: u32 = 4096;
 /// Bytes per texel (format `R32G32B32A32_UINT`: four 32-bit words).
 pub const TEXEL_BYTES: usize = 16;
 
-/// A 2D `R32G32B32A32_UINT` sampled image holding an array of texels, row by row, in
-/// `SHADER_READ_ONLY_OPTIMAL` layout (WGSL `texture_2d<u32>`).
+/// A 2D `R32G32B32A32_UINT` storage image holding an array of texels, row by row, in `GENERAL`
+/// layout, which shaders only read (WGSL `texture_storage_2d<rgba32uint, read>`).
 pub struct TexelImage {
     pub(crate) shared: Arc<DeviceShared>,
     image: vk::Image,

@@ -1,7 +1,7 @@
 //! Vulkan compute backend: the only module in penumbra that talks to Vulkan (through `ash`).
 //!
-//! A [`Context`] owns the instance, the logical device and one compute queue. Buffers and
-//! pipelines created from it share the device through reference counting, so they may be
+//! A [`Context`] owns the instance, the logical device and one compute queue. Buffers, texel
+//! images and pipelines created from it share the device through reference counting, so they may be
 //! dropped in any order relative to the context. Every fallible operation returns
 //! [`VulkanError`]; nothing in here panics on bad input or a missing driver.
 

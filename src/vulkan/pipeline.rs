@@ -1,4 +1,5 @@
-//! Compute pipelines built from SPIR-V words, with one descriptor set (set 0) of buffers.
+//! Compute pipelines built from SPIR-V words, with one descriptor set (set 0) of buffers and
+//! texel images.
 
 use super::context::{Context, DeviceShared};
 use super::{vk_err, VulkanError};
@@ -15,7 +16,7 @@ pub enum BindingType {
     StorageReadWrite,
     /// `var<uniform>`: a uniform buffer.
     Uniform,
-    /// `texture_2d<u32>` read with `textureLoad`: a [`super::TexelImage`].
+    /// `texture_storage_2d<rgba32uint, read>`: a [`super::TexelImage`].
     TexelImage,
 }
 
