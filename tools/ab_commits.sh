@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # A/B timing of two commits whose host code differs (tools/ab.rs compares
 # shader trees under one binary; a change to the GPU data layout needs two
-# binaries). Builds `ab` at both commits in scratch worktrees, then runs them,
-# each with its own commit's shaders
-# in turn, A B A B …, each process rendering the scene (3 pairs of frames,
+# binaries). Builds `ab` at both commits in scratch worktrees, then runs them
+# in turn, A B A B …, each with its own commit's shaders, each process
+# rendering the scene (3 pairs of frames,
 # --cpu-time: the driver threads' CPU time per frame, which other processes
 # sharing the cores do not inflate), and prints each round's medians, the
 # median of the per-round ratios B/A and its range.

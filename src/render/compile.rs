@@ -162,6 +162,72 @@ impl Assembled {
         }
     }
 
+    /// Checks every resource the WGSL declares against what the renderer
+    /// binds there ([`super::BINDINGS`]): a mismatch (a shader edit that
+    /// turns a storage buffer into a uniform, say) would otherwise reach the
+    /// driver, which may crash on it.
+    fn check_bindings(&self, module: &naga::Module) -> Result<(), CompileError> {
+        use super::BindingType as B;
+        for (handle, var) in module.global_variables.iter() {
+            let Some(rb) = &var.binding else {
+                continue;
+            };
+            let declared = match (var.space, &module.types[var.ty].inner) {
+                (naga::AddressSpace::Uniform, _) => Some(B::Uniform),
+                (naga::AddressSpace::Storage { access }, _) => {
+                    Some(if access.contains(naga::StorageAccess::STORE) {
+                        B::StorageReadWrite
+                    } else {
+                        B::StorageReadOnly
+                    })
+                }
+                (
+                    naga::AddressSpace::Handle,
+                    naga::TypeInner::Image {
+                        dim: naga::ImageDimension::D2,
+                        arrayed: false,
+                        class:
+                            naga::ImageClass::Storage {
+                                format: naga::StorageFormat::Rgba32Uint,
+                                access,
+                            },
+                    },
+                ) if !access.contains(naga::StorageAccess::STORE) => Some(B::TexelImage),
+                _ => None,
+            };
+            let expected = if rb.group == 0 {
+                super::BINDINGS.get(rb.binding as usize).copied()
+            } else {
+                None
+            };
+            if declared.is_some() && declared == expected {
+                continue;
+            }
+            let describe = |b: Option<B>| match b {
+                Some(B::Uniform) => "a uniform buffer (var<uniform>)",
+                Some(B::StorageReadOnly) => "a read-only storage buffer (var<storage, read>)",
+                Some(B::StorageReadWrite) => "a storage buffer (var<storage, read_write>)",
+                Some(B::TexelImage) => "a texel image (texture_storage_2d<rgba32uint, read>)",
+                None => "nothing",
+            };
+            let name = var.name.as_deref().unwrap_or("?");
+            let what = if declared.is_some() {
+                describe(declared)
+            } else {
+                "a resource of another kind"
+            };
+            let message = format!(
+                "`{name}` at @group({}) @binding({}) is declared as {what}, but the renderer binds {} there",
+                rb.group,
+                rb.binding,
+                describe(expected)
+            );
+            let span = module.global_variables.get_span(handle);
+            return Err(self.error_at(span.location(&self.text).into(), message));
+        }
+        Ok(())
+    }
+
     /// Parses the WGSL (no validation): for layout checks and tools.
     pub fn parse(&self) -> Result<naga::Module, CompileError> {
         naga::front::wgsl::parse_str(&self.text)
@@ -228,6 +294,7 @@ impl Assembled {
         let info = validator
             .validate(&module)
             .map_err(|e| self.error_at(e.location(&self.text), error_chain(e.as_inner())))?;
+        self.check_bindings(&module)?;
         let mut constants = naga::back::PipelineConstants::default();
         if !kernel.text_specialise {
             for (name, on) in values {
@@ -501,6 +568,69 @@ mod tests {
                 assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
                 assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
                 src.compile(&Features::default(), &kernel).unwrap();
+            }
+        }
+    }
+
+    /// A shader that declares a binding as something other than what the
+    /// renderer binds there fails to compile, naming the file, the variable
+    /// and both kinds (the driver would otherwise see the mismatch).
+    #[test]
+    fn mismatched_bindings_are_compile_errors() {
+        let src = ShaderSource::Embedded.assemble().unwrap();
+        let kernel = KernelOptions::default();
+        let f = Features::default();
+        let cases: [(&[(&str, &str)], [&str; 5]); 3] = [
+            (
+                // The BVH's records and primitive references swapped.
+                &[
+                    ("@binding(9) var bvh_nodes", "@binding(10) var bvh_nodes"),
+                    (
+                        "@binding(10) var<storage, read> bvh_prims",
+                        "@binding(9) var<storage, read> bvh_prims",
+                    ),
+                ],
+                [
+                    "bvh.wgsl:",
+                    "@binding(",
+                    "declared as a",
+                    "texel image",
+                    "read-only storage buffer",
+                ],
+            ),
+            (
+                &[(
+                    "var<storage, read> lights",
+                    "var<storage, read_write> lights",
+                )],
+                [
+                    "lights.wgsl:",
+                    "`lights`",
+                    "@binding(5)",
+                    "var<storage, read_write>",
+                    "var<storage, read>",
+                ],
+            ),
+            (
+                &[("@binding(3) var triangles", "@binding(14) var triangles")],
+                [
+                    "triangle.wgsl:",
+                    "`triangles`",
+                    "@binding(14)",
+                    "texel image",
+                    "binds nothing",
+                ],
+            ),
+        ];
+        for (edits, words) in cases {
+            let mut bad = src.clone();
+            for (from, to) in edits {
+                assert!(bad.text.contains(from), "{from}");
+                bad.text = bad.text.replace(from, to);
+            }
+            let err = bad.compile(&f, &kernel).unwrap_err().to_string();
+            for w in words {
+                assert!(err.contains(w), "{w:?} missing from: {err}");
             }
         }
     }
