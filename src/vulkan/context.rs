@@ -341,6 +341,9 @@ pub struct Context {
     pub(crate) memory_properties: vk::PhysicalDeviceMemoryProperties,
     /// `PENUMBRA_FORCE_STAGING=1`: never map device memory, always go through staging buffers.
     pub(crate) force_staging: bool,
+    /// What the device can do with texel images' format in optimal tiling (Vulkan makes
+    /// storage-image use of `R32G32B32A32_UINT` mandatory; checked all the same).
+    pub(crate) texel_format_features: vk::FormatFeatureFlags,
     info: DeviceInfo,
     limits: DeviceLimits,
 }
@@ -400,6 +403,13 @@ impl Context {
         let instance = &shared.instance.instance;
         let memory_properties =
             unsafe { instance.get_physical_device_memory_properties(physical.handle) };
+        let texel_format_features = unsafe {
+            instance.get_physical_device_format_properties(
+                physical.handle,
+                vk::Format::R32G32B32A32_UINT,
+            )
+        }
+        .optimal_tiling_features;
         Ok(Context {
             submitter: Mutex::new(Submitter {
                 queue,
@@ -408,6 +418,7 @@ impl Context {
             }),
             memory_properties,
             force_staging: env_flag("PENUMBRA_FORCE_STAGING"),
+            texel_format_features,
             info: physical.info,
             limits: physical.limits,
             shared,

@@ -94,6 +94,13 @@ impl Context {
         }
         let texels = (data.len() / TEXEL_BYTES) as u64;
         let height = checked_rows(label, texels, self.limits().max_image_dimension_2d)?;
+        let needed = vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::TRANSFER_DST;
+        if !self.texel_format_features.contains(needed) {
+            return Err(VulkanError::Limit(format!(
+                "texel image '{label}': this device cannot use R32G32B32A32_UINT storage images (format features {:?})",
+                self.texel_format_features
+            )));
+        }
         let bytes = height as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64;
         let device = &self.shared.device;
         let format = vk::Format::R32G32B32A32_UINT;
