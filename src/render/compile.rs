@@ -580,7 +580,9 @@ mod tests {
         let src = ShaderSource::Embedded.assemble().unwrap();
         let kernel = KernelOptions::default();
         let f = Features::default();
-        let cases: [(&[(&str, &str)], [&str; 5]); 3] = [
+        // (text edits, words the error must contain)
+        type Case<'a> = (&'a [(&'a str, &'a str)], [&'a str; 5]);
+        let cases: [Case; 3] = [
             (
                 // The BVH's records and primitive references swapped.
                 &[
