@@ -203,10 +203,15 @@ impl Context {
         Ok(())
     }
 
-    /// A host-visible transfer-source buffer holding `data`, for uploads to device memory
-    /// that cannot be mapped (images in optimal tiling).
-    pub(super) fn upload_buffer(&self, label: &str, data: &[u8]) -> Result<Buffer, VulkanError> {
-        let staging = self.allocate(label, Role::Upload, data.len() as u64)?;
+    /// A host-visible transfer-source buffer of `size` bytes holding `data` and then zeros, for
+    /// uploads to device memory that cannot be mapped (images in optimal tiling).
+    pub(super) fn upload_buffer(
+        &self,
+        label: &str,
+        size: u64,
+        data: &[u8],
+    ) -> Result<Buffer, VulkanError> {
+        let staging = self.allocate(label, Role::Upload, size)?;
         staging.write_mapped(data)?;
         Ok(staging)
     }

@@ -170,9 +170,7 @@ impl Context {
             .map_err(vk_err("vkCreateImageView"))?;
 
         // Images in optimal tiling cannot be mapped: upload through a staging buffer.
-        let mut padded = data.to_vec();
-        padded.resize(bytes as usize, 0);
-        let staging = self.upload_buffer(label, &padded)?;
+        let staging = self.upload_buffer(label, bytes, data)?;
         let to_transfer = vk::ImageMemoryBarrier::default()
             .old_layout(vk::ImageLayout::UNDEFINED)
             .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
