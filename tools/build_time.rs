@@ -1,0 +1,55 @@
+//! Times the GPU-ready BVH build (`GpuScene::build_bvh`: tree and quantised
+//! records) of the benchmark's 1,002,002-triangle scene, a fresh layout per
+//! build, and prints the median and range together with the SAH cost of the
+//! trees of that scene, the bunny and the bunny subdivided 3×.
+//!
+//!   cargo run --release --example build_time -- [BUILDS]
+//!
+//! To compare two commits, run it at each in turn a few times (the second
+//! core of a small machine comes and goes: compare runs taken alternately).
+
+#[allow(dead_code)]
+#[path = "bench/meshes.rs"]
+mod meshes;
+
+use std::time::Instant;
+
+use penumbra::render::layout::GpuScene;
+
+fn main() -> anyhow::Result<()> {
+    let builds: usize = match std::env::args().nth(1) {
+        Some(a) => a
+            .parse()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| anyhow::anyhow!("BUILDS: expected a positive integer, got '{a}'"))?,
+        None => 7,
+    };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let bunny = meshes::bunny_scene(root)?;
+    let scene = meshes::sphere_scene(&bunny, 1_000_000);
+    let mut ms: Vec<f64> = (0..builds)
+        .map(|_| {
+            let mut gpu = GpuScene::new(&scene);
+            let start = Instant::now();
+            gpu.build_bvh();
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    ms.sort_by(f64::total_cmp);
+    println!(
+        "{} triangles: build {:.1} ms median [{:.1}–{:.1}] of {builds}",
+        scene.triangle_count(),
+        ms[ms.len() / 2],
+        ms[0],
+        ms[ms.len() - 1]
+    );
+    let sah = |s: &penumbra::scene::Scene| GpuScene::new(s).build_tree().sah_cost();
+    println!(
+        "SAH cost: this scene {:.4}, bunny {:.4}, bunny subdivided 3x {:.4}",
+        sah(&scene),
+        sah(&bunny),
+        sah(&meshes::subdivided_bunny(&bunny, 3))
+    );
+    Ok(())
+}
