@@ -12,6 +12,7 @@
 #[path = "bench/meshes.rs"]
 mod meshes;
 
+use std::io::Write;
 use std::time::Instant;
 
 use penumbra::render::layout::GpuScene;
@@ -37,19 +38,22 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
     ms.sort_by(f64::total_cmp);
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "{} triangles: build {:.1} ms median [{:.1}–{:.1}] of {builds}",
         scene.triangle_count(),
         ms[ms.len() / 2],
         ms[0],
         ms[ms.len() - 1]
-    );
+    )?;
     let sah = |s: &penumbra::scene::Scene| GpuScene::new(s).build_tree().sah_cost();
-    println!(
+    writeln!(
+        out,
         "SAH cost: this scene {:.4}, bunny {:.4}, bunny subdivided 3x {:.4}",
         sah(&scene),
         sah(&bunny),
         sah(&meshes::subdivided_bunny(&bunny, 3))
-    );
+    )?;
     Ok(())
 }
