@@ -22,7 +22,8 @@
 //! records that it permutes itself (each pass over a node streams through
 //! memory), takes each child's bounds from the partition pass instead of a
 //! pass of its own, and writes the subtrees below the parallel levels as
-//! flat depth-first chunks (no allocation per node). Boxes given in `f64`
+//! flat depth-first chunks of finished nodes (no allocation per node).
+//! Boxes given in `f64`
 //! are rounded outwards first, so every box still contains its primitive,
 //! and the finished nodes keep their `f32` boxes (32 bytes a node).
 //! Bin indices come from one SSE2 truncation for all three axes, and the
@@ -172,6 +173,16 @@ pub struct Node {
 }
 
 impl Node {
+    /// A node over the builder's box `b`.
+    fn new(b: &Box32, index: u32, count: u32) -> Node {
+        Node {
+            min: b.min.to_array(),
+            max: b.max.to_array(),
+            index,
+            count,
+        }
+    }
+
     /// The bounds, exactly, in `f64`.
     pub fn bounds(&self) -> Aabb {
         Aabb {
@@ -198,7 +209,9 @@ pub struct Bvh {
 /// depth-first chunks (no allocation per node); only the few nodes above
 /// them, split while the work is still handed out to rayon, are boxed.
 enum Tree {
-    Chunk(Vec<Node32>),
+    /// Nodes as in [`Bvh::nodes`], except that an interior node's right
+    /// child is counted from the start of its chunk.
+    Chunk(Vec<Node>),
     Interior {
         bounds: Box32,
         children: Box<(Tree, Tree)>,
@@ -213,14 +226,6 @@ impl Tree {
             Tree::Interior { size, .. } => *size,
         }
     }
-}
-
-/// A node of a chunk: like [`Node`], with an interior node's right child
-/// counted from the start of its chunk.
-struct Node32 {
-    bounds: Box32,
-    index: u32,
-    count: u32,
 }
 
 impl Bvh {
@@ -329,16 +334,10 @@ fn flatten(tree: &Tree, out: &mut [Node], offset: u32) {
     match tree {
         Tree::Chunk(nodes) => {
             for (o, n) in out.iter_mut().zip(nodes) {
-                *o = Node {
-                    min: n.bounds.min.to_array(),
-                    max: n.bounds.max.to_array(),
-                    index: if n.count == 0 {
-                        n.index + offset
-                    } else {
-                        n.index
-                    },
-                    count: n.count,
-                };
+                *o = *n;
+                if n.count == 0 {
+                    o.index += offset;
+                }
             }
         }
         Tree::Interior {
@@ -348,12 +347,7 @@ fn flatten(tree: &Tree, out: &mut [Node], offset: u32) {
             let (head, rest) = out.split_at_mut(1);
             let (l, r) = rest.split_at_mut(left);
             let right_at = offset + 1 + left as u32;
-            head[0] = Node {
-                min: bounds.min.to_array(),
-                max: bounds.max.to_array(),
-                index: right_at,
-                count: 0,
-            };
+            head[0] = Node::new(bounds, right_at, 0);
             rayon::join(
                 || flatten(&children.0, l, offset + 1),
                 || flatten(&children.1, r, right_at),
@@ -495,11 +489,7 @@ fn build_subtree(
         split(order, &b, &cb, sample_above)
     };
     let Some((mid, ((lb, lcb), (rb, rcb)))) = split else {
-        let leaf = Node32 {
-            bounds: b,
-            index: first as u32,
-            count: order.len() as u32,
-        };
+        let leaf = Node::new(&b, first as u32, order.len() as u32);
         return (Tree::Chunk(vec![leaf]), depth);
     };
     let (left, right) = order.split_at_mut(mid);
@@ -527,14 +517,10 @@ fn build_chunk(
     b: Box32,
     cb: Box32,
     sample_above: usize,
-    out: &mut Vec<Node32>,
+    out: &mut Vec<Node>,
 ) -> usize {
     let at = out.len();
-    out.push(Node32 {
-        bounds: b,
-        index: first as u32,
-        count: order.len() as u32,
-    });
+    out.push(Node::new(&b, first as u32, order.len() as u32));
     if order.len() <= 1 || depth + 1 >= MAX_DEPTH {
         return depth;
     }
