@@ -369,7 +369,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         )
         .err();
     assert!(
-        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 0 is TexelImage")),
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 0 is TexelImage but 'output' is a storage buffer")),
         "{err:?}"
     );
     let err = ctx
@@ -381,7 +381,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         )
         .err();
     assert!(
-        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 1 is StorageReadWrite")),
+        matches!(&err, Some(VulkanError::InvalidArgument(m)) if m.contains("binding 1 is StorageReadWrite but 'pattern' is a texel image")),
         "{err:?}"
     );
     // An image of another context is rejected.

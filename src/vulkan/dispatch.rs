@@ -165,11 +165,15 @@ impl Context {
             let given = match resource {
                 Resource::Buffer(buffer) => {
                     self.check_owned(buffer)?;
-                    format!("{:?} buffer", buffer.usage())
+                    match buffer.usage() {
+                        Some(BufferUsage::Storage) => "storage buffer",
+                        Some(BufferUsage::Uniform) => "uniform buffer",
+                        None => "staging buffer",
+                    }
                 }
                 Resource::Image(image) => {
                     self.check_owned_image(image)?;
-                    "texel image".to_string()
+                    "texel image"
                 }
             };
             let matches = match (binding, resource) {
