@@ -237,6 +237,39 @@ impl Context {
         })
     }
 
+    /// Dedicated memory for `what` (named in errors, e.g. `buffer 'x'`) of the first memory
+    /// type meeting `preferences` (see [`Context::memory_type`]), with that type's flags. Running
+    /// out of memory is a [`VulkanError::Limit`] naming `what` and the size.
+    pub(super) fn allocate_memory(
+        &self,
+        what: &str,
+        requirements: vk::MemoryRequirements,
+        preferences: &[vk::MemoryPropertyFlags],
+    ) -> Result<(vk::DeviceMemory, vk::MemoryPropertyFlags), VulkanError> {
+        let (type_index, flags) = self
+            .memory_type(requirements.memory_type_bits, preferences)
+            .ok_or_else(|| VulkanError::Limit(format!("no suitable memory type for {what}")))?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(requirements.size)
+            .memory_type_index(type_index);
+        // SAFETY: valid allocate info; the caller owns (and frees) the memory.
+        let memory =
+            unsafe { self.shared.device.allocate_memory(&alloc, None) }.map_err(|result| {
+                match result {
+                    vk::Result::ERROR_OUT_OF_DEVICE_MEMORY
+                    | vk::Result::ERROR_OUT_OF_HOST_MEMORY => VulkanError::Limit(format!(
+                        "allocating {} for {what} failed: {result}",
+                        mib(requirements.size)
+                    )),
+                    result => VulkanError::Vk {
+                        what: "vkAllocateMemory",
+                        result,
+                    },
+                }
+            })?;
+        Ok((memory, flags))
+    }
+
     /// Checks limits, then creates a buffer of `size` bytes (min 16) with dedicated memory.
     fn allocate(&self, label: &str, role: Role, size: u64) -> Result<Buffer, VulkanError> {
         let size = size.max(16);
@@ -307,27 +340,9 @@ impl Context {
             coherent: true,
         };
         let requirements = unsafe { device.get_buffer_memory_requirements(handle) };
-        let (type_index, flags) = self
-            .memory_type(requirements.memory_type_bits, preferences)
-            .ok_or_else(|| {
-                VulkanError::Limit(format!("no suitable memory type for buffer '{label}'"))
-            })?;
-        let alloc = vk::MemoryAllocateInfo::default()
-            .allocation_size(requirements.size)
-            .memory_type_index(type_index);
-        buffer.memory =
-            unsafe { device.allocate_memory(&alloc, None) }.map_err(|result| match result {
-                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                    VulkanError::Limit(format!(
-                        "allocating {} for buffer '{label}' failed: {result}",
-                        mib(requirements.size)
-                    ))
-                }
-                result => VulkanError::Vk {
-                    what: "vkAllocateMemory",
-                    result,
-                },
-            })?;
+        let flags;
+        (buffer.memory, flags) =
+            self.allocate_memory(&format!("buffer '{label}'"), requirements, preferences)?;
         unsafe { device.bind_buffer_memory(handle, buffer.memory, 0) }
             .map_err(vk_err("vkBindBufferMemory"))?;
         let map_device_memory = flags.contains(M::HOST_VISIBLE) && !self.force_staging;

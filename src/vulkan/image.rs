@@ -44,7 +44,7 @@ impl TexelImage {
         &self.label
     }
 
-    /// Bytes of device memory the texels take, padding included.
+    /// Bytes of the texels, including the zero padding of the last row.
     pub fn size(&self) -> u64 {
         rows(self.texels) as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64
     }
@@ -137,24 +137,15 @@ impl Context {
                 requirements.size
             )));
         }
-        use vk::MemoryPropertyFlags as M;
-        let (type_index, _) = self
-            .memory_type(
-                requirements.memory_type_bits,
-                &[M::DEVICE_LOCAL, M::empty()],
-            )
-            .ok_or_else(|| {
-                VulkanError::Limit(format!("no suitable memory type for texel image '{label}'"))
-            })?;
-        let alloc = vk::MemoryAllocateInfo::default()
-            .allocation_size(requirements.size)
-            .memory_type_index(type_index);
-        result.memory = unsafe { device.allocate_memory(&alloc, None) }.map_err(|result| {
-            VulkanError::Limit(format!(
-                "allocating {} bytes for texel image '{label}' failed: {result}",
-                requirements.size
-            ))
-        })?;
+        let preferences = [
+            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+            vk::MemoryPropertyFlags::empty(),
+        ];
+        (result.memory, _) = self.allocate_memory(
+            &format!("texel image '{label}'"),
+            requirements,
+            &preferences,
+        )?;
         unsafe { device.bind_image_memory(image, result.memory, 0) }
             .map_err(vk_err("vkBindImageMemory"))?;
         let range = vk::ImageSubresourceRange::default()
