@@ -431,8 +431,7 @@ impl GpuScene {
     pub fn build_bvh(&mut self) {
         let bvh = self.build_tree();
         let mut prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes =
-            super::quantised_bvh::encode(&bvh, |i| node_bounds(bvh.nodes[i].bounds()), &mut prims);
+        self.bvh_nodes = super::quantised_bvh::encode(&bvh, &mut prims);
         self.bvh_prims = prims;
         self.bvh_depth = bvh.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;

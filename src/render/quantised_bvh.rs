@@ -24,10 +24,10 @@
 //! exactly). The decoded box therefore always contains the exact `f32` box,
 //! and the slab test's widening (Ize 2013) applies to it unchanged.
 
-use rayon::prelude::*;
+use glam::Vec3A;
 
-use super::layout::BvhNode;
-use crate::bvh::{Aabb, Bvh};
+use super::layout::{node_bounds, BvhNode};
+use crate::bvh::{Aabb, Bvh, Node};
 
 /// A child reference with this bit set is a leaf: the low bits give its
 /// first entry in the primitive references (the last one carries
@@ -43,56 +43,173 @@ const MIN_EXP: i32 = -118;
 const MAX_EXP: i32 = 127;
 
 /// Encodes a built hierarchy: one record per interior node, the root's
-/// first, each child's decoded box containing `bounds(child)` (the node's
-/// box with whatever padding the caller wants). The root's own box is never tested (its children's boxes lie
-/// inside it, so that test would only cost a step). A tree that is a single
-/// leaf gets one record with that leaf on the left and [`NONE`] on the
-/// right. `prims` are the tree's primitive references; the last of each
-/// leaf gets [`PRIM_LAST`].
-pub fn encode(bvh: &Bvh, bounds: impl Fn(usize) -> Aabb + Sync, prims: &mut [u32]) -> Vec<BvhNode> {
+/// first, each child's decoded box containing [`node_bounds`] of the
+/// child's box (padded for the rounding of the ray/primitive tests). The
+/// root's own box is never tested (its children's boxes lie inside it, so
+/// that test would only cost a step). A tree that is a single leaf gets one
+/// record with that leaf on the left and [`NONE`] on the right. `prims` are
+/// the tree's primitive references; the last of each leaf gets
+/// [`PRIM_LAST`].
+pub fn encode(bvh: &Bvh, prims: &mut [u32]) -> Vec<BvhNode> {
     let nodes = &bvh.nodes;
-    if nodes.is_empty() {
+    let Some(root) = nodes.first() else {
         return Vec::new();
+    };
+    if root.count != 0 {
+        prims[(root.index + root.count - 1) as usize] |= PRIM_LAST;
+        return vec![record(root, None, LEAF | root.index, NONE)];
     }
-    // The interior nodes in depth-first order; record r is interior[r].
-    let mut interior = Vec::with_capacity(nodes.len() / 2 + 1);
-    for (i, n) in nodes.iter().enumerate() {
-        if n.count == 0 {
-            interior.push(i);
-        } else {
-            prims[(n.index + n.count - 1) as usize] |= PRIM_LAST;
-        }
-    }
-    if interior.is_empty() {
-        return vec![quantise(bounds(0), None, LEAF | nodes[0].index, NONE)];
-    }
-    // A child's reference from its parent's record r (node i): an interior
-    // left child is the next record; before an interior right child come
-    // the left subtree's interior nodes, (size - 1) / 2 of its
-    // right - i - 1 nodes (every interior node has two children).
-    let child = |r: usize, i: usize, c: usize| {
+    // Every interior node has two children, so a subtree of s nodes has
+    // (s - 1) / 2 interior ones: each subtree's records form a run whose
+    // place follows from the sizes alone, and the subtrees are encoded in
+    // parallel into their own runs (no pass to number the records first).
+    let mut records = bytemuck::zeroed_vec((nodes.len() - 1) / 2);
+    subtree(nodes, 0, 0, &mut records, prims, 0);
+    records
+}
+
+/// Subtrees of more records than this are split between rayon's threads.
+const PARALLEL_RECORDS: usize = 1 << 13;
+
+/// Writes the records of the subtree at interior node `i`, whose record is
+/// `r` (the first of `out`), and marks the last reference of each of its
+/// leaves in `prims`, which starts at reference `base`.
+fn subtree(
+    nodes: &[Node],
+    i: usize,
+    r: usize,
+    out: &mut [BvhNode],
+    prims: &mut [u32],
+    base: usize,
+) {
+    let parallel = out.len() > PARALLEL_RECORDS;
+    let (left, right) = (i + 1, nodes[i].index as usize);
+    // The left subtree's records follow this one; the right's follow them.
+    let (left_r, right_r) = (r + 1, r + 1 + (right - left - 1) / 2);
+    let (head, rest) = out.split_at_mut(1);
+    let (left_out, right_out) = rest.split_at_mut(right_r - left_r);
+    let reference = |c: usize, record: usize| match nodes[c].count {
+        0 => record as u32,
+        _ => LEAF | nodes[c].index,
+    };
+    head[0] = self::record(
+        &nodes[left],
+        Some(&nodes[right]),
+        reference(left, left_r),
+        reference(right, right_r),
+    );
+    let child = |c: usize, r: usize, out: &mut [BvhNode], prims: &mut [u32], base: usize| {
         let n = &nodes[c];
         if n.count != 0 {
-            LEAF | n.index
-        } else if c == i + 1 {
-            (r + 1) as u32
+            prims[(n.index + n.count - 1) as usize - base] |= PRIM_LAST;
         } else {
-            (r + 1 + (c - i - 2) / 2) as u32
+            subtree(nodes, c, r, out, prims, base);
         }
     };
-    interior
-        .par_iter()
-        .enumerate()
-        .map(|(r, &i)| {
-            let right = nodes[i].index as usize;
-            quantise(
-                bounds(i + 1),
-                Some(bounds(right)),
-                child(r, i, i + 1),
-                child(r, i, right),
-            )
-        })
-        .collect()
+    if parallel {
+        // The right subtree's references start at its leftmost leaf's.
+        let mut c = right;
+        while nodes[c].count == 0 {
+            c += 1;
+        }
+        let right_base = nodes[c].index as usize;
+        let (lp, rp) = prims.split_at_mut(right_base - base);
+        rayon::join(
+            || child(left, left_r, left_out, lp, base),
+            || child(right, right_r, right_out, rp, right_base),
+        );
+    } else {
+        child(left, left_r, left_out, prims, base);
+        child(right, right_r, right_out, prims, base);
+    }
+}
+
+/// Coordinates below this magnitude (2⁹⁰) take the `f32` path of
+/// [`record`]: every step of it then stays a normal `f32` (see
+/// [`quantise32`]); beyond it the `f64` encoder takes over.
+const F32_LIMIT: f32 = (1u128 << 90) as f32;
+
+/// The record of two nodes (the second absent for a single-leaf tree): each
+/// decoded box contains [`node_bounds`] of the node's box. Most boxes take
+/// the vector `f32` path ([`padded`], [`quantise32`]); the `f64` one gives
+/// the same guarantee for any coordinates and serves the huge ones.
+fn record(left: &Node, right: Option<&Node>, left_ref: u32, right_ref: u32) -> BvhNode {
+    let l = (Vec3A::from(left.min), Vec3A::from(left.max));
+    let r = right.map_or(l, |r| (Vec3A::from(r.min), Vec3A::from(r.max)));
+    let magnitude = l.0.abs().max(l.1.abs()).max(r.0.abs().max(r.1.abs()));
+    if magnitude.cmplt(Vec3A::splat(F32_LIMIT)).all() {
+        return quantise32(padded(l), padded(r), left_ref, right_ref);
+    }
+    let f64_bounds = |n: &Node| node_bounds(n.bounds());
+    quantise(f64_bounds(left), right.map(f64_bounds), left_ref, right_ref)
+}
+
+/// A box of finite `f32` corners below [`F32_LIMIT`] grown so that it
+/// contains [`node_bounds`] of it, in `f32` arithmetic: that pads by 2⁻²⁰
+/// of the largest magnitude, exactly (in `f64`); this pads by twice as much
+/// (at least 2⁻¹²⁶), which covers the rounding of the `f32` subtraction
+/// (at most 2⁻²³ of the largest magnitude).
+fn padded((min, max): (Vec3A, Vec3A)) -> (Vec3A, Vec3A) {
+    let magnitude = min.abs().max(max.abs()).max_element();
+    let pad = (magnitude * (1.0 / (1u32 << 19) as f32)).max(f32::MIN_POSITIVE);
+    (min - Vec3A::splat(pad), max + Vec3A::splat(pad))
+}
+
+/// [`quantise`] for boxes of magnitude below 2⁹¹ (padded from below
+/// [`F32_LIMIT`]), all three axes at once in `f32` lanes: the grid's
+/// steps are then normal `f32`s (2^e for e in [-118, 93]), every quotient
+/// below is under 2²⁴ in magnitude, so `floor` is exact, and each grid
+/// point `origin + q·s` is exact — so checking each grid point against the
+/// coordinate it bounds (the quotients may round, or underflow) makes each
+/// decoded box contain its input.
+fn quantise32(l: (Vec3A, Vec3A), r: (Vec3A, Vec3A), left_ref: u32, right_ref: u32) -> BvhNode {
+    let (lo, hi) = (l.0.min(r.0), l.1.max(r.1));
+    let e = [0, 1, 2].map(|a| grid_exponent32(lo[a], hi[a]));
+    let s = Vec3A::from_array(e.map(|e| f32::from_bits(((e + 127) as u32) << 23)));
+    let inv = Vec3A::from_array(e.map(|e| f32::from_bits(((127 - e) as u32) << 23)));
+    // The frame starts at the grid point at or below lo (checked: a tiny
+    // negative lo over a coarse step underflows to -0, whose floor is 0).
+    let origin = (lo * inv).floor() * s;
+    let origin = origin - Vec3A::select(origin.cmpgt(lo), s, Vec3A::ZERO);
+    let (zero, top) = (Vec3A::ZERO, Vec3A::splat(255.0));
+    // Steps from the origin; the subtraction can round (a tiny x far from
+    // a huge origin), so each grid point is checked, exactly.
+    let below = |x: Vec3A| {
+        let q = ((x - origin) * inv).floor().clamp(zero, top);
+        q - Vec3A::select((origin + q * s).cmpgt(x), Vec3A::ONE, zero)
+    };
+    let above = |y: Vec3A| {
+        let q = (-((origin - y) * inv).floor()).clamp(zero, top);
+        q + Vec3A::select((origin + q * s).cmplt(y), Vec3A::ONE, zero)
+    };
+    let steps = [below(l.0), above(l.1), below(r.0), above(r.1)].map(|q| q.as_uvec3());
+    let byte = |k: usize| steps[k / 3][k % 3];
+    let word = |w: usize| (0..4).fold(0, |acc, b| acc | byte(4 * w + b) << (8 * b));
+    BvhNode {
+        origin: origin.to_array(),
+        exponents: (0..3).fold(0, |acc, a| acc | ((e[a] + 127) as u32) << (8 * a)),
+        quantised: [word(0), word(1), word(2)],
+        left: left_ref,
+        right: right_ref,
+        ..BvhNode::default()
+    }
+}
+
+/// [`grid_exponent`] in `f32` for |lo|, |hi| < 2⁹¹: the span and its
+/// 253rd part round by at most 2⁻²³ together, well inside the margin of 253
+/// steps for 254; a 253rd part below the normal range means the finest grid.
+fn grid_exponent32(lo: f32, hi: f32) -> i32 {
+    let part = (hi - lo) / 253.0;
+    let fine = if part >= f32::MIN_POSITIVE {
+        let bits = part.to_bits();
+        ((bits >> 23) as i32 - 127) + i32::from(bits & ((1 << 23) - 1) != 0)
+    } else {
+        MIN_EXP
+    };
+    // |lo|, |hi| < 2^(m + 1) ≤ 2^22 · 2^e, as in `grid_exponent` (a
+    // subnormal or zero magnitude gives the finest grid).
+    let coarse = ((lo.abs().max(hi.abs()).to_bits() >> 23) as i32 - 127) - 21;
+    fine.max(coarse).clamp(MIN_EXP, MAX_EXP)
 }
 
 /// The record of two children (the second absent for a single-leaf tree).
@@ -268,18 +385,54 @@ mod tests {
             prop_assert!(contains(flushed(dr), r));
             prop_assert!(node.origin.iter().all(|o| !o.is_subnormal()));
         }
+
+        /// The same for the `f32` quantiser, on boxes within its range.
+        #[test]
+        fn f32_decoded_boxes_contain_the_exact_ones(l in boxed(), r in boxed()) {
+            // Coordinates beyond the f32 path's range scaled into it.
+            let within = |b: ([f32; 3], [f32; 3])| {
+                let f = |x: f32| if x.abs() < 2.0 * F32_LIMIT { x } else { x / (1u64 << 40) as f32 };
+                sorted(b.0.map(f), b.1.map(f))
+            };
+            let (l, r) = (within(l), within(r));
+            let node = quantise32(lanes(l), lanes(r), 0, 0);
+            let [dl, dr] = decode(&node);
+            prop_assert!(contains(dl, l), "{dl:?} !⊇ {l:?}");
+            prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
+            prop_assert!(contains(flushed(dl), l));
+            prop_assert!(contains(flushed(dr), r));
+            prop_assert!(node.origin.iter().all(|o| !o.is_subnormal()));
+        }
+
+        /// Each record's decoded boxes contain `node_bounds` of its nodes'
+        /// boxes (checked in `f64`), whichever path encoded it.
+        #[test]
+        fn records_contain_the_padded_node_boxes(l in boxed(), r in boxed()) {
+            let node = |b: ([f32; 3], [f32; 3])| Node { min: b.0, max: b.1, index: 0, count: 1 };
+            let [dl, dr] = decode(&record(&node(l), Some(&node(r)), 0, 0));
+            for (d, b) in [(dl, l), (dr, r)] {
+                let want = node_bounds(aabb(b));
+                prop_assert!(aabb(d).contains(&want), "{d:?} !⊇ {want:?}");
+                prop_assert!(aabb(flushed(d)).contains(&want));
+            }
+        }
+    }
+
+    fn lanes(b: ([f32; 3], [f32; 3])) -> (Vec3A, Vec3A) {
+        (Vec3A::from(b.0), Vec3A::from(b.1))
     }
 
     #[test]
     fn quantisation_is_tight_for_ordinary_boxes() {
         // Away from huge coordinates a step is below 2/254 of the parent's
         // extent (the smallest power of two above 1/254 of it), and a
-        // decoded side is at most one step out.
+        // decoded side is at most one step out, on both paths.
         let boxes = crate::bvh::random_boxes(2000, 12345);
         for pair in boxes.chunks(2) {
             let (l, r) = (pair[0].outward_f32(), pair[1].outward_f32());
             let [dl, dr] = decode(&quantise(aabb(l), Some(aabb(r)), 0, 0));
-            for (d, e) in [(dl, l), (dr, r)] {
+            let [fl, fr] = decode(&quantise32(lanes(l), lanes(r), 0, 0));
+            for (d, e) in [(dl, l), (dr, r), (fl, l), (fr, r)] {
                 for a in 0..3 {
                     let extent = l.1[a].max(r.1[a]) - l.0[a].min(r.0[a]);
                     let step = extent * 2.0 / 254.0;
@@ -299,7 +452,7 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         let f32_box = |i: usize| (bvh.nodes[i].min, bvh.nodes[i].max);
         let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, |i| bvh.nodes[i].bounds(), &mut prims);
+        let records = encode(&bvh, &mut prims);
         let interior = bvh.nodes.iter().filter(|n| n.count == 0).count();
         assert_eq!(records.len(), interior);
         let mut seen = vec![0u32; boxes.len()];
@@ -340,7 +493,7 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         assert_eq!(bvh.nodes.len(), 1);
         let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, |i| bvh.nodes[i].bounds(), &mut prims);
+        let records = encode(&bvh, &mut prims);
         assert_eq!(records.len(), 1);
         assert_eq!((records[0].left, records[0].right), (LEAF, NONE));
         assert_eq!(prims[1] & PRIM_LAST, PRIM_LAST);
