@@ -643,13 +643,17 @@ fn split(
         let x = (p.bounds().centre2() - cb.min) * scale;
         x.cmpge(plane).bitmask() & (1 << axis) == 0
     };
-    Some(partition(order, goes_left))
+    Some(partition(order, &goes_left))
 }
 
 /// Partitions `order` in place by `goes_left` (Hoare: swap only misplaced
 /// pairs), gathering both sides' bounds on the way, so the children need
 /// no pass of their own; returns the size of the left part with them.
-fn partition(order: &mut [Prim], goes_left: impl Fn(&Prim) -> bool) -> (usize, Sides) {
+/// Nodes that fit in the cache take [`partition_scratch`].
+fn partition(order: &mut [Prim], goes_left: &impl Fn(&Prim) -> bool) -> (usize, Sides) {
+    if order.len() <= SCRATCH_PARTITION {
+        return partition_scratch(order, goes_left);
+    }
     let mut left = (Box32::EMPTY, Box32::EMPTY);
     let mut right = (Box32::EMPTY, Box32::EMPTY);
     let add = |side: &mut (Box32, Box32), p: &Prim| {
@@ -672,6 +676,45 @@ fn partition(order: &mut [Prim], goes_left: impl Fn(&Prim) -> bool) -> (usize, S
         order.swap(i, j - 1);
     }
     (i, (left, right))
+}
+
+/// Nodes of at most this many primitives partition through a scratch
+/// buffer (it stays in the cache).
+const SCRATCH_PARTITION: usize = PARALLEL_THRESHOLD;
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Vec<Prim>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// [`partition`] without a data-dependent branch: each primitive is written
+/// to the next free place at the front or the back of a scratch buffer
+/// (the choice is a conditional move, not a jump the predictor must guess
+/// for every primitive of an unordered node), then copied back; the sides'
+/// bounds take a second pass over the cached records.
+fn partition_scratch(order: &mut [Prim], goes_left: &impl Fn(&Prim) -> bool) -> (usize, Sides) {
+    let n = order.len();
+    let left = SCRATCH.with_borrow_mut(|scratch| {
+        if scratch.len() < n {
+            scratch.resize(
+                n,
+                Prim {
+                    min: Vec4::ZERO,
+                    max: Vec3A::ZERO,
+                },
+            );
+        }
+        let (mut l, mut r) = (0, n);
+        for p in order.iter() {
+            let left = goes_left(p);
+            scratch[if left { l } else { r - 1 }] = *p;
+            l += usize::from(left);
+            r -= usize::from(!left);
+        }
+        order.copy_from_slice(&scratch[..n]);
+        l
+    });
+    let (l, r) = order.split_at(left);
+    (left, (bounds_of(l), bounds_of(r)))
 }
 
 /// The bins of a node, per axis.
