@@ -27,7 +27,12 @@
 //! are rounded outwards first, so every box still contains its primitive,
 //! and the finished nodes keep their `f32` boxes (32 bytes a node).
 //! Bin indices come from one SSE2 truncation for all three axes, and the
-//! partition tests the split plane with one compare.
+//! partition tests the split plane with one compare. Nodes below the
+//! parallel levels (they fit in the cache) partition through a scratch
+//! buffer, each primitive going to its side by a conditional move rather
+//! than Hoare's branches, which mispredict on unordered nodes: 0.96× the
+//! million-triangle build (`build_time` at 74db587 and c07d727, alternately:
+//! 87.6 against 84.6 ms, medians of three runs).
 //!
 //! Nodes of more than `SAMPLE_ABOVE` (2k) primitives, all but the last
 //! few levels, pick their split from the bins of a stratified sample of at
