@@ -23,6 +23,14 @@
 //! picks the grid points below and above each child's corners (checked
 //! exactly). The decoded box therefore always contains the exact `f32` box,
 //! and the slab test's widening (Ize 2013) applies to it unchanged.
+//!
+//! Fast: the encoder quantises all three axes at once in `f32` SIMD lanes
+//! (exact for coordinates below 2⁹⁰, where every step of it is a normal
+//! `f32`; an `f64` path with the same checks takes larger ones), and walks
+//! the tree in parallel, each subtree writing its own run of records. That
+//! took the million-triangle scene's references and records from 20 to
+//! 9.5 ms (`cargo run --release --example build_time`, which prints this
+//! phase, at 3e417a5 and 74db587).
 
 use glam::Vec3A;
 
