@@ -29,6 +29,8 @@ const BVH_LEAF: u32 = 0x80000000u;
 const BVH_NONE: u32 = 0xffffffffu;
 // bvh::MAX_DEPTH: the tree is never deeper, so the stack cannot overflow.
 const BVH_STACK: u32 = 64u;
+// Stack entries kept in registers (a vec4) before any goes to the array.
+const STACK_REGISTERS: u32 = 4u;
 const BOX_MISS: f32 = 3.4e38;
 // 16-byte texels per record (48 bytes).
 const BVH_RECORD_TEXELS: u32 = 3u;
@@ -114,6 +116,13 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
     var stack: array<u32, BVH_STACK>;
     var stack_t: array<f32, BVH_STACK>;
     var sp = 0u;
+    // The stack's newest entries (up to STACK_REGISTERS, newest in .x) live
+    // in vector registers and only older ones in the arrays: lavapipe keeps
+    // a per-lane array in memory, read and written a lane at a time, so most
+    // pushes and pops now never touch it (docs/bench.md §6).
+    var top = vec4<u32>();
+    var top_t = vec4<f32>();
+    var held = 0u;
     var node = 0u;
     var node_t = 0.0;
     // "While-while" (Aila and Laine 2009): every lane descends to a leaf
@@ -134,9 +143,16 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
             let near_t = select(t.y, t.x, left_first);
             let far_t = select(t.x, t.y, left_first);
             if far_t < BOX_MISS {
-                stack[sp] = select(record.left, record.right, left_first);
-                stack_t[sp] = far_t;
-                sp++;
+                // When the registers are full their oldest entry spills.
+                if held == STACK_REGISTERS {
+                    stack[sp] = top.w;
+                    stack_t[sp] = top_t.w;
+                    sp++;
+                } else {
+                    held++;
+                }
+                top = vec4<u32>(select(record.left, record.right, left_first), top.xyz);
+                top_t = vec4<f32>(far_t, top_t.xyz);
             }
             node = select(record.right, record.left, left_first);
             node_t = near_t;
@@ -156,12 +172,19 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
                 i++;
             }
         }
-        if sp == 0u {
+        if held > 0u {
+            node = top.x;
+            node_t = top_t.x;
+            top = top.yzwx;
+            top_t = top_t.yzwx;
+            held--;
+        } else if sp > 0u {
+            sp--;
+            node = stack[sp];
+            node_t = stack_t[sp];
+        } else {
             break;
         }
-        sp--;
-        node = stack[sp];
-        node_t = stack_t[sp];
     }
 }
 
@@ -175,6 +198,9 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
     let inv_dir = safe_inverse(ray.dir);
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
+    // Newest entries in registers, as in bvh_closest.
+    var top = vec4<u32>();
+    var held = 0u;
     var node = 0u;
     loop {
         if (node & BVH_LEAF) == 0u {
@@ -185,8 +211,13 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
             if hit_left || hit_right {
                 let left_first = t.x <= t.y;
                 if hit_left && hit_right {
-                    stack[sp] = select(record.left, record.right, left_first);
-                    sp++;
+                    if held == STACK_REGISTERS {
+                        stack[sp] = top.w;
+                        sp++;
+                    } else {
+                        held++;
+                    }
+                    top = vec4<u32>(select(record.left, record.right, left_first), top.xyz);
                 }
                 node = select(record.right, record.left, left_first);
                 continue;
@@ -208,11 +239,16 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
                 i++;
             }
         }
-        if sp == 0u {
+        if held > 0u {
+            node = top.x;
+            top = top.yzwx;
+            held--;
+        } else if sp > 0u {
+            sp--;
+            node = stack[sp];
+        } else {
             break;
         }
-        sp--;
-        node = stack[sp];
     }
     return false;
 }
