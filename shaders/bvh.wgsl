@@ -8,17 +8,14 @@
 
 // Mirrored by render::layout::BvhNode; fetched by bvh_record.
 struct BvhNode {
-    // Frame: lower corner, and per axis the biased exponent of one step.
-    origin: vec3<f32>,
-    exponents: u32,
+    // Frame: per axis its lower corner k * 2^e, the signed k in the upper 24
+    // bits and the step's biased exponent e + 127 in the low 8.
+    origin: vec3<u32>,
+    left: u32,
     // Left child's lower and upper corner, then the right child's, a byte
     // per coordinate.
     quantised: vec3<u32>,
-    left: u32,
     right: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 const PRIM_SPHERE: u32 = 0x80000000u;
@@ -32,8 +29,8 @@ const BVH_STACK: u32 = 64u;
 // Stack entries kept in registers (a vec4) before any goes to the array.
 const STACK_REGISTERS: u32 = 4u;
 const BOX_MISS: f32 = 3.4e38;
-// 16-byte texels per record (48 bytes).
-const BVH_RECORD_TEXELS: u32 = 3u;
+// 16-byte texels per record (32 bytes).
+const BVH_RECORD_TEXELS: u32 = 2u;
 
 // Records are texels (shaders/texels.wgsl says why).
 @group(0) @binding(9) var bvh_nodes: texture_storage_2d<rgba32uint, read>;
@@ -44,29 +41,22 @@ fn bvh_record(i: u32) -> BvhNode {
     let base = i * BVH_RECORD_TEXELS;
     let a = textureLoad(bvh_nodes, texel(base));
     let b = textureLoad(bvh_nodes, texel(base + 1u));
-    let c = textureLoad(bvh_nodes, texel(base + 2u));
-    var node: BvhNode;
-    node.origin = bitcast<vec3<f32>>(a.xyz);
-    node.exponents = a.w;
-    node.quantised = b.xyz;
-    node.left = b.w;
-    node.right = c.x;
-    return node;
+    return BvhNode(a.xyz, a.w, b.xyz, b.w);
 }
 
 // Entry distances of a record's two children (BOX_MISS where missed). The
 // decoding is exact: the encoder put every corner on a grid of f32 values
 // (origin + q * 2^e, no rounding), below or above the child's box.
 fn child_entries(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> vec2<f32> {
-    let e = vec3<u32>(node.exponents, node.exponents >> 8u, node.exponents >> 16u);
-    let step = bitcast<vec3<f32>>((e & vec3<u32>(255u)) << vec3<u32>(23u));
+    let step = bitcast<vec3<f32>>((node.origin & vec3<u32>(255u)) << vec3<u32>(23u));
+    // k * 2^e is exact: |k| < 2^23, and 2^e and the product are normal.
+    let o = vec3<f32>(bitcast<vec3<i32>>(node.origin) >> vec3<u32>(8u)) * step;
     let q = node.quantised;
     let byte = vec3<u32>(255u);
     let left_lo = vec3<f32>(vec3<u32>(q.x, q.x >> 8u, q.x >> 16u) & byte);
     let left_hi = vec3<f32>(vec3<u32>(q.x >> 24u, q.y, q.y >> 8u) & byte);
     let right_lo = vec3<f32>(vec3<u32>(q.y >> 16u, q.y >> 24u, q.z) & byte);
     let right_hi = vec3<f32>(vec3<u32>(q.z >> 8u, q.z >> 16u, q.z >> 24u) & byte);
-    let o = node.origin;
     let tl = box_entry(o + left_lo * step, o + left_hi * step, origin, inv_dir, t_max);
     var tr = box_entry(o + right_lo * step, o + right_hi * step, origin, inv_dir, t_max);
     if node.right == BVH_NONE {

@@ -149,23 +149,21 @@ pub struct ShaderNode {
 
 /// Mirrors `BvhNode` in `shaders/bvh.wgsl`: an interior node's two
 /// children, their boxes quantised in the node's frame (see
-/// [`super::quantised_bvh`]).
+/// [`super::quantised_bvh`]); 32 bytes, two texels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    /// Lower corner of the frame.
-    pub origin: [f32; 3],
-    /// Biased exponent (as in an `f32`) of each axis's step, one byte each.
-    pub exponents: u32,
+    /// The frame's lower corner, per axis `k·2^e` in one word: the signed
+    /// step count `k` in the upper 24 bits, the step's biased exponent
+    /// `e + 127` (as in an `f32`) in the low 8.
+    pub origin: [u32; 3],
+    /// Child reference: a record index, or `LEAF | first primitive`.
+    pub left: u32,
     /// Twelve steps, a byte each: the left child's lower then upper corner
     /// (x, y, z), then the right child's.
     pub quantised: [u32; 3],
-    /// Child references: a record index, or `LEAF | first primitive`.
-    pub left: u32,
+    /// The right child's reference.
     pub right: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
 }
 
 /// Mirrors `QueryRay` in `shaders/queries.wgsl`.
@@ -526,11 +524,7 @@ mod tests {
                     _pad2
                 ]
             ),
-            layout!(
-                "BvhNode",
-                BvhNode,
-                [origin, exponents, quantised, left, right, _pad0, _pad1, _pad2]
-            ),
+            layout!("BvhNode", BvhNode, [origin, left, quantised, right]),
             layout!("QueryRay", QueryRay, [origin, _pad0, dir, _pad1]),
             layout!(
                 "Aov",

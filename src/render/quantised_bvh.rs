@@ -11,10 +11,13 @@
 //! and count, then each child's two box corners. A record here needs 9: the
 //! frame and its scales, the twelve steps, the two child references;
 //! decoding them is cheap vector arithmetic. The bunny frame took 0.94× the
-//! CPU time this way (docs/bench.md §6), and the nodes take 48 bytes per
-//! interior node instead of 32 per node, 0.75× the memory. The kernel now
-//! reads each record as three texels of a read-only storage image
-//! (`vulkan::TexelImage`, straight-line code on lavapipe: docs/bench.md §6).
+//! CPU time this way (docs/bench.md §6). The kernel now reads each record
+//! as texels of a read-only storage image (`vulkan::TexelImage`,
+//! straight-line code on lavapipe: docs/bench.md §6), two of them: each
+//! axis's frame origin is stored as its step count and the step's exponent
+//! in one word, so a record takes 32 bytes per interior node (0.5× the
+//! memory of 32-byte nodes) and a traversal step fetches two texels, not
+//! three (0.98× the bunny's frame).
 //!
 //! Conservative by construction: each axis of a record is quantised on a
 //! grid `k·2^e` coarse enough that every grid point within reach is an
@@ -194,14 +197,22 @@ fn quantise32(l: (Vec3A, Vec3A), r: (Vec3A, Vec3A), left_ref: u32, right_ref: u3
     let steps = [below(l.0), above(l.1), below(r.0), above(r.1)].map(|q| q.as_uvec3());
     let byte = |k: usize| steps[k / 3][k % 3];
     let word = |w: usize| (0..4).fold(0, |acc, b| acc | byte(4 * w + b) << (8 * b));
+    // origin / s is the integer k, exactly.
+    let k = (origin * inv).to_array();
     BvhNode {
-        origin: origin.to_array(),
-        exponents: (0..3).fold(0, |acc, a| acc | ((e[a] + 127) as u32) << (8 * a)),
-        quantised: [word(0), word(1), word(2)],
+        origin: [0, 1, 2].map(|a| pack_origin(k[a] as i32, e[a])),
         left: left_ref,
+        quantised: [word(0), word(1), word(2)],
         right: right_ref,
-        ..BvhNode::default()
     }
+}
+
+/// A frame's lower corner `k·2^e` on one axis as the record stores it: the
+/// signed `k` in the upper 24 bits, the biased exponent in the low 8. The
+/// grid keeps |k| ≤ 2²² + 1 (see [`grid_exponent`]).
+fn pack_origin(k: i32, e: i32) -> u32 {
+    debug_assert!(k.unsigned_abs() < 1 << 23 && (MIN_EXP..=MAX_EXP).contains(&e));
+    ((k << 8) as u32) | (e + 127) as u32
 }
 
 /// [`grid_exponent`] in `f32` for |lo|, |hi| < 2⁹¹: the span and its
@@ -237,9 +248,9 @@ fn quantise(left: Aabb, right: Option<Aabb>, left_ref: u32, right_ref: u32) -> B
         let s = f64::from_bits(((e + 1023) as u64) << 52);
         let inv = f64::from_bits(((1023 - e) as u64) << 52);
         // The frame starts at the grid point at or below lo.
-        let origin = floor(lo * inv) * s;
-        node.origin[axis] = origin as f32;
-        node.exponents |= ((e + 127) as u32) << (8 * axis);
+        let k = floor(lo * inv);
+        let origin = k * s;
+        node.origin[axis] = pack_origin(k as i32, e);
         // Grid point q (exact in f64 as in f32).
         let point = |q: f64| origin + q * s;
         for (k, b) in [left, r].iter().enumerate() {
@@ -320,14 +331,20 @@ mod tests {
         let step = |k: usize| ((q[k / 4] >> (8 * (k % 4))) & 0xff) as f32;
         let mut out = [([0.0; 3], [0.0; 3]); 2];
         for axis in 0..3 {
-            let s = f32::from_bits(((node.exponents >> (8 * axis)) & 0xff) << 23);
-            let o = node.origin[axis];
+            let s = f32::from_bits((node.origin[axis] & 0xff) << 23);
+            let o = origins(node)[axis];
             for (k, b) in out.iter_mut().enumerate() {
                 b.0[axis] = o + step(6 * k + axis) * s;
                 b.1[axis] = o + step(6 * k + 3 + axis) * s;
             }
         }
         out
+    }
+
+    /// A record's frame origin, decoded as `shaders/bvh.wgsl` does.
+    fn origins(node: &BvhNode) -> [f32; 3] {
+        node.origin
+            .map(|w| (w as i32 >> 8) as f32 * f32::from_bits((w & 0xff) << 23))
     }
 
     fn contains(outer: ([f32; 3], [f32; 3]), inner: ([f32; 3], [f32; 3])) -> bool {
@@ -392,7 +409,7 @@ mod tests {
             prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
             prop_assert!(contains(flushed(dl), l));
             prop_assert!(contains(flushed(dr), r));
-            prop_assert!(node.origin.iter().all(|o| !o.is_subnormal()));
+            prop_assert!(origins(&node).iter().all(|o| !o.is_subnormal()));
         }
 
         /// The same for the `f32` quantiser, on boxes within its range.
@@ -410,7 +427,7 @@ mod tests {
             prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
             prop_assert!(contains(flushed(dl), l));
             prop_assert!(contains(flushed(dr), r));
-            prop_assert!(node.origin.iter().all(|o| !o.is_subnormal()));
+            prop_assert!(origins(&node).iter().all(|o| !o.is_subnormal()));
         }
 
         /// Each record's decoded boxes contain `node_bounds` of its nodes'
