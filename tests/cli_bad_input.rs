@@ -335,6 +335,46 @@ fn zero_radius() {
 }
 
 #[test]
+fn vertex_beyond_f32() {
+    // 1e39 is a finite f64 but no f32: the kernel could not even store it.
+    let s = mutated(|v| v["objects"][2]["vertices"][2] = json!([0, 1e39, 0]));
+    json_fails(
+        &s,
+        "objects[2].vertices[2]",
+        &["must lie within ±1e18", "f32"],
+    );
+}
+
+#[test]
+fn sphere_radius_beyond_the_coordinate_limit() {
+    let s = mutated(|v| v["objects"][1]["radius"] = json!(1e30));
+    json_fails(&s, "objects[1].radius", &["at most 1e18", "1e30"]);
+}
+
+#[test]
+fn light_position_beyond_the_coordinate_limit() {
+    let s = mutated(|v| v["lights"][1]["position"] = json!([2, 1e20, 2]));
+    json_fails(&s, "lights[1].position", &["must lie within ±1e18"]);
+}
+
+#[test]
+fn mesh_scaled_beyond_the_coordinate_limit() {
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.glb");
+    let s = mutated(|v| {
+        v["objects"].as_array_mut().unwrap().push(json!({
+            "type": "mesh", "file": bunny, "shader": "red",
+            "transform": {"scale": 1e30}
+        }));
+    });
+    fails_with(
+        "scene.json",
+        s,
+        &[],
+        &["objects[3].positions[", "must lie within ±1e18"],
+    );
+}
+
+#[test]
 fn zero_plane_normal() {
     let s = mutated(|v| v["objects"][0]["normal"] = json!([0, 0, 0]));
     json_fails(&s, "objects[0].normal", &["non-zero"]);

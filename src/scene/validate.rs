@@ -38,16 +38,56 @@ impl fmt::Display for Invalid {
 /// own limits are checked by the renderer.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
-fn finite3(field: &str, v: DVec3) -> Result<(), Invalid> {
-    if v.is_finite() {
-        Ok(())
-    } else {
+/// The largest coordinate magnitude a scene may use (positions, vectors,
+/// radii). The kernel computes in `f32`, relative to the camera, and
+/// squares distances: beyond about 1e19 those squares overflow `f32`
+/// (3.4e38), and a coordinate beyond 3.4e38 cannot be stored at all.
+pub const MAX_COORDINATE: f64 = 1e18;
+
+/// A position or vector: finite, and within ±[`MAX_COORDINATE`].
+fn bounded3(field: &str, v: DVec3) -> Result<(), Invalid> {
+    if !v.is_finite() {
         Err(Invalid::new(field, format!("must be finite, got {v}")))
+    } else if v.abs().max_element() > MAX_COORDINATE {
+        Err(Invalid::new(
+            field,
+            format!(
+                "must lie within ±{MAX_COORDINATE:e} (the kernel computes in f32), got [{}, {}, {}]",
+                num(v.x),
+                num(v.y),
+                num(v.z)
+            ),
+        ))
+    } else {
+        Ok(())
     }
 }
 
+/// `x` for a message: huge numbers in exponent form, not 30 digits.
+fn num(x: f64) -> String {
+    if x.abs() >= 1e16 {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// A radius: positive and at most [`MAX_COORDINATE`].
+fn radius_ok(field: &str, r: f64) -> Result<(), Invalid> {
+    if !(r > 0.0 && r <= MAX_COORDINATE) {
+        return Err(Invalid::new(
+            field,
+            format!(
+                "must be positive and at most {MAX_COORDINATE:e}, got {}",
+                num(r)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn unit(field: &str, v: DVec3) -> Result<(), Invalid> {
-    finite3(field, v)?;
+    bounded3(field, v)?;
     if (v.length() - 1.0).abs() > 1e-6 {
         return Err(Invalid::new(
             field,
@@ -79,7 +119,7 @@ fn samples_ok(field: &str, n: u32) -> Result<(), Invalid> {
 }
 
 pub(super) fn camera(c: &Camera) -> Result<(), Invalid> {
-    finite3("camera.position", c.position)?;
+    bounded3("camera.position", c.position)?;
     let o = c.orientation;
     let ortho = (o.transpose() * o - glam::DMat3::IDENTITY).to_cols_array();
     if !o.is_finite() || ortho.iter().any(|x| x.abs() > 1e-6) || o.determinant() < 0.0 {
@@ -188,29 +228,23 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
         }
         match &o.shape {
             Shape::Plane(p) => {
-                finite3(&f("point"), p.point)?;
+                bounded3(&f("point"), p.point)?;
                 unit(&f("normal"), p.normal)?;
             }
             Shape::Sphere(sp) => {
-                finite3(&f("center"), sp.center)?;
-                if !(sp.radius > 0.0 && sp.radius.is_finite()) {
-                    return Err(Invalid::new(
-                        f("radius"),
-                        format!("must be positive, got {}", sp.radius),
-                    ));
-                }
+                bounded3(&f("center"), sp.center)?;
+                radius_ok(&f("radius"), sp.radius)?;
             }
             Shape::Triangle(t) => {
                 for (k, v) in t.vertices.iter().enumerate() {
-                    finite3(&f(&format!("vertices[{k}]")), *v)?;
+                    bounded3(&f(&format!("vertices[{k}]")), *v)?;
                 }
             }
             Shape::Mesh(m) => {
-                if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
-                    return Err(Invalid::new(
-                        f(&format!("positions[{p}]")),
-                        "must be finite",
-                    ));
+                // Formats a field name only for the first bad position.
+                let bad = |p: &DVec3| !p.is_finite() || p.abs().max_element() > MAX_COORDINATE;
+                if let Some(k) = m.positions.iter().position(bad) {
+                    bounded3(&f(&format!("positions[{k}]")), m.positions[k])?;
                 }
                 if let Some(ns) = &m.normals {
                     if ns.len() != m.positions.len() {
@@ -247,14 +281,14 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
         colour(&f("specular"), l.specular)?;
         match l.kind {
             LightKind::Directional { direction } => unit(&f("direction"), direction)?,
-            LightKind::Point { position } => finite3(&f("position"), position)?,
+            LightKind::Point { position } => bounded3(&f("position"), position)?,
             LightKind::Spot {
                 position,
                 direction,
                 inner_angle,
                 outer_angle,
             } => {
-                finite3(&f("position"), position)?;
+                bounded3(&f("position"), position)?;
                 unit(&f("direction"), direction)?;
                 if !(inner_angle >= 0.0 && inner_angle < outer_angle) {
                     return Err(Invalid::new(
@@ -282,9 +316,9 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                 edge2,
                 samples,
             } => {
-                finite3(&f("corner"), corner)?;
-                finite3(&f("edge1"), edge1)?;
-                finite3(&f("edge2"), edge2)?;
+                bounded3(&f("corner"), corner)?;
+                bounded3(&f("edge1"), edge1)?;
+                bounded3(&f("edge2"), edge2)?;
                 let area = edge1.cross(edge2).length();
                 let spans_area = area > 1e-12 * edge1.length_squared().max(edge2.length_squared());
                 if !spans_area {
@@ -300,13 +334,8 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                 radius,
                 samples,
             } => {
-                finite3(&f("center"), center)?;
-                if !(radius > 0.0 && radius.is_finite()) {
-                    return Err(Invalid::new(
-                        f("radius"),
-                        format!("must be positive, got {radius}"),
-                    ));
-                }
+                bounded3(&f("center"), center)?;
+                radius_ok(&f("radius"), radius)?;
                 samples_ok(&f("samples"), samples)?;
             }
         }
