@@ -53,15 +53,13 @@ fn main() -> anyhow::Result<()> {
     let mut tree_ms = Vec::new();
     let mut encode_ms = Vec::new();
     for _ in 0..builds {
-        let gpu = GpuScene::new(&scene);
+        let mut gpu = GpuScene::new(&scene);
         let start = Instant::now();
         let bvh = gpu.build_tree();
         tree_ms.push(start.elapsed().as_secs_f64() * 1e3);
         let start = Instant::now();
-        let mut prims = bvh.prim_refs(gpu.triangles.len());
-        let nodes = penumbra::render::quantised_bvh::encode(&bvh, &mut prims);
+        gpu.encode_bvh(&bvh);
         encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
-        drop((bvh, nodes, prims));
     }
     tree_ms.sort_by(f64::total_cmp);
     encode_ms.sort_by(f64::total_cmp);

@@ -428,8 +428,14 @@ impl GpuScene {
     /// ([`super::quantised_bvh`]).
     pub fn build_bvh(&mut self) {
         let bvh = self.build_tree();
+        self.encode_bvh(&bvh);
+    }
+
+    /// The second half of [`GpuScene::build_bvh`]: the kernel's primitive
+    /// references and records of `bvh`, a tree from [`GpuScene::build_tree`].
+    pub fn encode_bvh(&mut self, bvh: &Bvh) {
         let mut prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode(&bvh, &mut prims);
+        self.bvh_nodes = super::quantised_bvh::encode(bvh, &mut prims);
         self.bvh_prims = prims;
         self.bvh_depth = bvh.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
