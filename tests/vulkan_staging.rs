@@ -1,14 +1,32 @@
-//! Runs the buffer and dispatch tests through the staging path (`PENUMBRA_FORCE_STAGING=1`), so
-//! the code used on discrete GPUs is exercised on lavapipe too. Its own test binary because the
-//! variable is process-global.
+//! Runs the buffer and dispatch tests, and whole renders, through the staging path
+//! (`PENUMBRA_FORCE_STAGING=1`), so the code used on discrete GPUs (device memory the host cannot
+//! map) is exercised on lavapipe too. Its own test binary, and one test, because the variable is
+//! process-global and read when a context opens.
 
+mod support;
 mod vulkan_kernel;
 use vulkan_kernel as common;
 
+use penumbra::render::{Renderer, RendererOptions};
 use penumbra::vulkan::*;
 
 #[test]
-fn staging_path_round_trip_and_dispatch() {
+fn staging_path_round_trip_dispatch_and_renders() {
+    // A render of every primitive, light and shader kind through mapped
+    // memory, before the variable is set, to compare with staging below.
+    let showcase = support::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.json"),
+    );
+    // Validation on when the suite asks for it (CI), as for the shared renderer.
+    let options = RendererOptions {
+        validation: std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1"),
+        ..Default::default()
+    };
+    let mapped = Renderer::new(&options)
+        .expect("a Vulkan device")
+        .render(&showcase)
+        .expect("mapped render");
+
     std::env::set_var("PENUMBRA_FORCE_STAGING", "1");
     let ctx = Context::new(&ContextOptions::default()).expect("a Vulkan device");
 
@@ -35,4 +53,22 @@ fn staging_path_round_trip_and_dispatch() {
     assert!(!run.input.is_host_visible() && !run.output.is_host_visible());
     assert!(!run.params.is_host_visible());
     ctx.check_validation().unwrap();
+
+    // Whole renders through staging: the showcase matches the mapped render
+    // exactly, and the benchmark scene matches Embree's independent counts
+    // (tests/render_bunny.rs).
+    let staged = Renderer::new(&options)
+        .expect("a Vulkan device")
+        .render(&showcase)
+        .expect("staging render");
+    assert_eq!(staged.image.pixels, mapped.image.pixels);
+    assert_eq!(staged.stats.shadow_rays, mapped.stats.shadow_rays);
+    let frame = support::render_with(
+        &support::tagged_bunny_scene(),
+        Default::default(),
+        Default::default(),
+    );
+    let [bunny, ground, _, ground_dark] = support::bunny_counts(&frame.image);
+    assert_eq!(bunny + ground, 858_452);
+    assert!(ground_dark.abs_diff(31_540) <= 2, "{ground_dark}");
 }
