@@ -164,10 +164,12 @@ pub fn markdown(r: &Results) -> String {
         o,
         "| Mesa shader cache | disabled (`MESA_SHADER_CACHE_DISABLE=true`) in every measuring process, so every driver compile below is cold |\n"
     );
-    let _ = writeln!(
-        o,
-        "**GPU column: pending a session with a GPU.** The program uses only the `Renderer` API and runs unchanged there: `cargo run --release --example bench -- --device <name or index from penumbra devices> --no-knobs --out docs/gpu` writes the same report for the GPU.\n"
-    );
+    if r.throughput.device.device_type == "CPU" {
+        let _ = writeln!(
+            o,
+            "**No GPU figures: this report ran on a CPU device, and no GPU machine was available to this project.** The program uses only the `Renderer` API and runs unchanged on a GPU: `cargo run --release --example bench -- --device <name or index from penumbra devices> --no-knobs --out docs/gpu` writes the same report there (every upload and readback through staging buffers where device memory is not host-visible, the path `tests/vulkan_staging.rs` renders through on lavapipe).\n"
+        );
+    }
 
     // ------------------------------------------------------------ summary
     let _ = writeln!(o, "## Headline figures\n");
