@@ -55,10 +55,10 @@ fn main() -> anyhow::Result<()> {
     for _ in 0..builds {
         let mut gpu = GpuScene::new(&scene);
         let start = Instant::now();
-        let bvh = gpu.build_tree();
+        let built = gpu.build_chunked();
         tree_ms.push(start.elapsed().as_secs_f64() * 1e3);
         let start = Instant::now();
-        gpu.encode_bvh(&bvh);
+        gpu.encode_bvh(&built);
         encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
     }
     tree_ms.sort_by(f64::total_cmp);

@@ -18,7 +18,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use crate::bvh::{Aabb, Bvh};
+use crate::bvh::{Aabb, Bvh, Chunked};
 use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
 
 /// Mirrors `Camera` in `shaders/camera.wgsl`.
@@ -427,24 +427,30 @@ impl GpuScene {
     /// outside its box ([`node_bounds`]), and encodes it for the kernel
     /// ([`super::quantised_bvh`]).
     pub fn build_bvh(&mut self) {
-        let bvh = self.build_tree();
-        self.encode_bvh(&bvh);
+        let built = self.build_chunked();
+        self.encode_bvh(&built);
     }
 
     /// The second half of [`GpuScene::build_bvh`]: the kernel's primitive
-    /// references and records of `bvh`, a tree from [`GpuScene::build_tree`].
-    pub fn encode_bvh(&mut self, bvh: &Bvh) {
-        let mut prims = bvh.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode(bvh, &mut prims);
+    /// references and records of `built`, from [`GpuScene::build_chunked`].
+    pub fn encode_bvh(&mut self, built: &Chunked) {
+        let mut prims = built.prim_refs(self.triangles.len());
+        self.bvh_nodes = super::quantised_bvh::encode_chunked(built, &mut prims);
         self.bvh_prims = prims;
-        self.bvh_depth = bvh.depth;
+        self.bvh_depth = built.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
     }
 
-    /// The host tree [`GpuScene::build_bvh`] encodes: over the triangles,
-    /// then the spheres (the build is deterministic, so calling this again
-    /// gives the same tree).
+    /// The host tree [`GpuScene::build_bvh`] encodes, flattened: over the
+    /// triangles, then the spheres (the build is deterministic, so calling
+    /// this again gives the same tree).
     pub fn build_tree(&self) -> Bvh {
+        self.build_chunked().flatten()
+    }
+
+    /// The first half of [`GpuScene::build_bvh`]: the host tree as the
+    /// builder leaves it (see [`GpuScene::build_tree`]).
+    pub fn build_chunked(&self) -> Chunked {
         // Triangle boxes straight from the f32 vertices (exact); sphere
         // boxes computed in f64 and rounded outwards.
         let spheres: Vec<([f32; 3], [f32; 3])> = self
@@ -460,7 +466,7 @@ impl GpuScene {
             })
             .collect();
         let triangles = &self.triangles;
-        Bvh::build_f32(triangles.len() + spheres.len(), |i| {
+        Bvh::build_f32_chunked(triangles.len() + spheres.len(), |i| {
             let Some(t) = triangles.get(i) else {
                 return spheres[i - triangles.len()];
             };

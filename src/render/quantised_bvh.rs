@@ -30,7 +30,8 @@
 //! Fast: the encoder quantises all three axes at once in `f32` SIMD lanes
 //! (exact for coordinates below 2⁹⁰, where every step of it is a normal
 //! `f32`; an `f64` path with the same checks takes larger ones), and walks
-//! the tree in parallel, each subtree writing its own run of records. That
+//! the tree in parallel, each subtree writing its own run of records
+//! (straight from the builder's chunks: [`encode_chunked`]). That
 //! took the million-triangle scene's references and records from 20 to
 //! 9.5 ms, and its whole build from 105 to 94 ms (`cargo run --release
 //! --example build_time`, alternate runs; its phase line is timed with the
@@ -39,7 +40,7 @@
 use glam::Vec3A;
 
 use super::layout::{node_bounds, BvhNode};
-use crate::bvh::{Aabb, Bvh, Node};
+use crate::bvh::{Aabb, Bvh, Chunked, Node, Tree};
 
 /// A child reference with this bit set is a leaf: the low bits give its
 /// first entry in the primitive references (the last one carries
@@ -68,8 +69,7 @@ pub fn encode(bvh: &Bvh, prims: &mut [u32]) -> Vec<BvhNode> {
         return Vec::new();
     };
     if root.count != 0 {
-        prims[(root.index + root.count - 1) as usize] |= PRIM_LAST;
-        return vec![record(root, None, LEAF | root.index, NONE)];
+        return single_leaf(root, prims);
     }
     // Every interior node has two children, so a subtree of s nodes has
     // (s - 1) / 2 interior ones: each subtree's records form a run whose
@@ -78,6 +78,66 @@ pub fn encode(bvh: &Bvh, prims: &mut [u32]) -> Vec<BvhNode> {
     let mut records = bytemuck::zeroed_vec((nodes.len() - 1) / 2);
     subtree(nodes, 0, 0, &mut records, prims, 0);
     records
+}
+
+/// [`encode`] of the builder's tree as it is ([`Chunked`]), without the
+/// flat copy [`Chunked::flatten`] makes: the same records (tested).
+pub fn encode_chunked(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
+    let Some(tree) = &built.tree else {
+        return Vec::new();
+    };
+    let root = tree.root();
+    if root.count != 0 {
+        return single_leaf(&root, prims);
+    }
+    let mut records = bytemuck::zeroed_vec((tree.size() - 1) / 2);
+    chunked_subtree(tree, 0, &mut records, prims, 0);
+    records
+}
+
+/// The one record of a tree that is a single leaf: the leaf on the left.
+fn single_leaf(root: &Node, prims: &mut [u32]) -> Vec<BvhNode> {
+    prims[(root.index + root.count - 1) as usize] |= PRIM_LAST;
+    vec![record(root, None, LEAF | root.index, NONE)]
+}
+
+/// [`subtree`] above the chunks: the boxed top nodes, then each chunk as a
+/// flat subtree (its right-child indices count from the chunk's start,
+/// which is what [`subtree`] reads; its leaves hold global references).
+fn chunked_subtree(tree: &Tree, r: usize, out: &mut [BvhNode], prims: &mut [u32], base: usize) {
+    let Tree::Interior { children, .. } = tree else {
+        let Tree::Chunk(nodes) = tree else {
+            unreachable!()
+        };
+        let root = &nodes[0];
+        if root.count != 0 {
+            prims[(root.index + root.count - 1) as usize - base] |= PRIM_LAST;
+        } else {
+            subtree(nodes, 0, r, out, prims, base);
+        }
+        return;
+    };
+    let (left, right) = (&children.0, &children.1);
+    let (left_r, right_r) = (r + 1, r + 1 + (left.size() - 1) / 2);
+    let (head, rest) = out.split_at_mut(1);
+    let (left_out, right_out) = rest.split_at_mut(right_r - left_r);
+    let (l, rt) = (left.root(), right.root());
+    let reference = |n: &Node, record: usize| match n.count {
+        0 => record as u32,
+        _ => LEAF | n.index,
+    };
+    head[0] = record(
+        &l,
+        Some(&rt),
+        reference(&l, left_r),
+        reference(&rt, right_r),
+    );
+    let right_base = right.first_prim() as usize;
+    let (lp, rp) = prims.split_at_mut(right_base - base);
+    rayon::join(
+        || chunked_subtree(left, left_r, left_out, lp, base),
+        || chunked_subtree(right, right_r, right_out, rp, right_base),
+    );
 }
 
 /// Subtrees of more records than this are split between rayon's threads.
@@ -511,6 +571,25 @@ mod tests {
         assert!(seen.iter().all(|&s| s == 1));
         let lasts = prims.iter().filter(|&&p| p & PRIM_LAST != 0).count();
         assert_eq!(lasts, bvh.nodes.iter().filter(|n| n.count > 0).count());
+    }
+
+    /// Encoding the builder's tree as it is gives exactly the records and
+    /// references of encoding its flat copy: for a single leaf, one chunk,
+    /// and trees with boxed nodes above their chunks.
+    #[test]
+    fn chunked_encoding_equals_the_flat_one() {
+        for n in [1, 2, 5, 3000, 60_000] {
+            let boxes = crate::bvh::random_boxes(n, 777);
+            let chunked = Bvh::build_f32_chunked(n, |i| boxes[i].outward_f32());
+            let boxed_top = matches!(chunked.tree, Some(Tree::Interior { .. }));
+            assert_eq!(boxed_top, n > 4096, "{n}");
+            let mut chunked_prims = chunked.prims.clone();
+            let records = encode_chunked(&chunked, &mut chunked_prims);
+            let bvh = chunked.flatten();
+            let mut flat_prims = bvh.prims.clone();
+            assert_eq!(records, encode(&bvh, &mut flat_prims), "{n}");
+            assert_eq!(chunked_prims, flat_prims, "{n}");
+        }
     }
 
     #[test]
