@@ -261,8 +261,9 @@ impl Tree {
     }
 }
 
-/// A hierarchy as the builder leaves it (see [`Tree`]), before
-/// [`Chunked::flatten`]: the GPU encoder needs no flat copy.
+/// A hierarchy as the builder leaves it, before [`Chunked::flatten`]: the
+/// subtrees built on one thread as flat chunks under a few boxed top
+/// nodes. The GPU encoder reads it as it is and needs no flat copy.
 pub struct Chunked {
     /// The tree; `None` when there are no primitives.
     pub(crate) tree: Option<Tree>,
