@@ -435,7 +435,7 @@ impl GpuScene {
     /// references and records of `built`, from [`GpuScene::build_chunked`].
     pub fn encode_bvh(&mut self, built: &Chunked) {
         let mut prims = built.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode_chunked(built, &mut prims);
+        self.bvh_nodes = super::quantised_bvh::encode(built, &mut prims);
         self.bvh_prims = prims;
         self.bvh_depth = built.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;

@@ -31,7 +31,7 @@
 //! (exact for coordinates below 2⁹⁰, where every step of it is a normal
 //! `f32`; an `f64` path with the same checks takes larger ones), and walks
 //! the tree in parallel, each subtree writing its own run of records
-//! (straight from the builder's chunks: [`encode_chunked`]). That
+//! (straight from the builder's chunks). That
 //! took the million-triangle scene's references and records from 20 to
 //! 9.5 ms, and its whole build from 105 to 94 ms (`cargo run --release
 //! --example build_time`, alternate runs; its phase line is timed with the
@@ -40,7 +40,7 @@
 use glam::Vec3A;
 
 use super::layout::{node_bounds, BvhNode};
-use crate::bvh::{Aabb, Bvh, Chunked, Node, Tree};
+use crate::bvh::{Aabb, Chunked, Node, Tree};
 
 /// A child reference with this bit set is a leaf: the low bits give its
 /// first entry in the primitive references (the last one carries
@@ -55,34 +55,16 @@ const MIN_EXP: i32 = -118;
 /// Largest scale exponent (biased 254, the largest finite one).
 const MAX_EXP: i32 = 127;
 
-/// Encodes a built hierarchy: one record per interior node, the root's
-/// first, each child's decoded box containing [`node_bounds`] of the
-/// child's box (padded for the rounding of the ray/primitive tests). The
-/// root's own box is never tested (its children's boxes lie inside it, so
-/// that test would only cost a step). A tree that is a single leaf gets one
-/// record with that leaf on the left and [`NONE`] on the right. `prims` are
-/// the tree's primitive references; the last of each leaf gets
-/// [`PRIM_LAST`].
-pub fn encode(bvh: &Bvh, prims: &mut [u32]) -> Vec<BvhNode> {
-    let nodes = &bvh.nodes;
-    let Some(root) = nodes.first() else {
-        return Vec::new();
-    };
-    if root.count != 0 {
-        return single_leaf(root, prims);
-    }
-    // Every interior node has two children, so a subtree of s nodes has
-    // (s - 1) / 2 interior ones: each subtree's records form a run whose
-    // place follows from the sizes alone, and the subtrees are encoded in
-    // parallel into their own runs (no pass to number the records first).
-    let mut records = bytemuck::zeroed_vec((nodes.len() - 1) / 2);
-    subtree(nodes, 0, 0, &mut records, prims, 0);
-    records
-}
-
-/// [`encode`] of the builder's tree as it is ([`Chunked`]), without the
-/// flat copy [`Chunked::flatten`] makes: the same records (tested).
-pub fn encode_chunked(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
+/// Encodes a built hierarchy as the builder leaves it ([`Chunked`]: no
+/// flat copy needed): one record per interior node in depth-first order,
+/// the root's first, each child's decoded box containing [`node_bounds`]
+/// of the child's box (padded for the rounding of the ray/primitive
+/// tests). The root's own box is never tested (its children's boxes lie
+/// inside it, so that test would only cost a step). A tree that is a single
+/// leaf gets one record with that leaf on the left and [`NONE`] on the
+/// right. `prims` are the tree's primitive references; the last of each
+/// leaf gets [`PRIM_LAST`].
+pub fn encode(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
     let Some(tree) = &built.tree else {
         return Vec::new();
     };
@@ -90,6 +72,10 @@ pub fn encode_chunked(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
     if root.count != 0 {
         return single_leaf(&root, prims);
     }
+    // Every interior node has two children, so a subtree of s nodes has
+    // (s - 1) / 2 interior ones: each subtree's records form a run whose
+    // place follows from the sizes alone, and the subtrees are encoded in
+    // parallel into their own runs (no pass to number the records first).
     let mut records = bytemuck::zeroed_vec((tree.size() - 1) / 2);
     chunked_subtree(tree, 0, &mut records, prims, 0);
     records
@@ -380,7 +366,7 @@ fn floor(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::Aabb;
+    use crate::bvh::Bvh;
     use glam::DVec3;
     use proptest::prelude::*;
 
@@ -463,13 +449,7 @@ mod tests {
         /// the device flushes subnormals.
         #[test]
         fn decoded_boxes_contain_the_exact_ones(l in boxed(), r in boxed()) {
-            let node = quantise(aabb(l), Some(aabb(r)), 0, 0);
-            let [dl, dr] = decode(&node);
-            prop_assert!(contains(dl, l), "{dl:?} !⊇ {l:?}");
-            prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
-            prop_assert!(contains(flushed(dl), l));
-            prop_assert!(contains(flushed(dr), r));
-            prop_assert!(origins(&node).iter().all(|o| !o.is_subnormal()));
+            contains_both(&quantise(aabb(l), Some(aabb(r)), 0, 0), l, r)?;
         }
 
         /// The same for the `f32` quantiser, on boxes within its range.
@@ -481,13 +461,7 @@ mod tests {
                 sorted(b.0.map(f), b.1.map(f))
             };
             let (l, r) = (within(l), within(r));
-            let node = quantise32(lanes(l), lanes(r), 0, 0);
-            let [dl, dr] = decode(&node);
-            prop_assert!(contains(dl, l), "{dl:?} !⊇ {l:?}");
-            prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
-            prop_assert!(contains(flushed(dl), l));
-            prop_assert!(contains(flushed(dr), r));
-            prop_assert!(origins(&node).iter().all(|o| !o.is_subnormal()));
+            contains_both(&quantise32(lanes(l), lanes(r), 0, 0), l, r)?;
         }
 
         /// Each record's decoded boxes contain `node_bounds` of its nodes'
@@ -502,6 +476,22 @@ mod tests {
                 prop_assert!(aabb(flushed(d)).contains(&want));
             }
         }
+    }
+
+    /// Both decoded children of `node` contain their boxes `l` and `r`,
+    /// flushed to zero or not, and the frame's origin is a normal number.
+    fn contains_both(
+        node: &BvhNode,
+        l: ([f32; 3], [f32; 3]),
+        r: ([f32; 3], [f32; 3]),
+    ) -> Result<(), TestCaseError> {
+        let [dl, dr] = decode(node);
+        prop_assert!(contains(dl, l), "{dl:?} !⊇ {l:?}");
+        prop_assert!(contains(dr, r), "{dr:?} !⊇ {r:?}");
+        prop_assert!(contains(flushed(dl), l));
+        prop_assert!(contains(flushed(dr), r));
+        prop_assert!(origins(node).iter().all(|o| !o.is_subnormal()));
+        Ok(())
     }
 
     fn lanes(b: ([f32; 3], [f32; 3])) -> (Vec3A, Vec3A) {
@@ -529,16 +519,27 @@ mod tests {
         }
     }
 
-    /// Walks the records from the root's: every primitive sits in
-    /// exactly one leaf, every leaf's references end with one PRIM_LAST, and
-    /// every decoded box contains the node's exact box.
+    /// Walks the records from the root's alongside the flat tree: every
+    /// primitive sits in exactly one leaf, every leaf's references end with
+    /// one PRIM_LAST, and every decoded box contains the node's exact box.
+    /// For a tree that is one chunk, and one with boxed nodes above its
+    /// chunks.
     #[test]
     fn records_reach_every_primitive_once_inside_their_boxes() {
-        let boxes = crate::bvh::random_boxes(5000, 12345);
-        let bvh = Bvh::build(&boxes);
+        for n in [3000, 60_000] {
+            let boxes = crate::bvh::random_boxes(n, 12345);
+            let built = Bvh::build_f32_chunked(n, |i| boxes[i].outward_f32());
+            let boxed_top = matches!(built.tree, Some(Tree::Interior { .. }));
+            assert_eq!(boxed_top, n > 4096, "{n}");
+            let mut prims = built.prims.clone();
+            let records = encode(&built, &mut prims);
+            let bvh = built.flatten();
+            walk(&bvh, &boxes, &records, &prims);
+        }
+    }
+
+    fn walk(bvh: &Bvh, boxes: &[Aabb], records: &[BvhNode], prims: &[u32]) {
         let f32_box = |i: usize| (bvh.nodes[i].min, bvh.nodes[i].max);
-        let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, &mut prims);
         let interior = bvh.nodes.iter().filter(|n| n.count == 0).count();
         assert_eq!(records.len(), interior);
         let mut seen = vec![0u32; boxes.len()];
@@ -573,32 +574,13 @@ mod tests {
         assert_eq!(lasts, bvh.nodes.iter().filter(|n| n.count > 0).count());
     }
 
-    /// Encoding the builder's tree as it is gives exactly the records and
-    /// references of encoding its flat copy: for a single leaf, one chunk,
-    /// and trees with boxed nodes above their chunks.
-    #[test]
-    fn chunked_encoding_equals_the_flat_one() {
-        for n in [1, 2, 5, 3000, 60_000] {
-            let boxes = crate::bvh::random_boxes(n, 777);
-            let chunked = Bvh::build_f32_chunked(n, |i| boxes[i].outward_f32());
-            let boxed_top = matches!(chunked.tree, Some(Tree::Interior { .. }));
-            assert_eq!(boxed_top, n > 4096, "{n}");
-            let mut chunked_prims = chunked.prims.clone();
-            let records = encode_chunked(&chunked, &mut chunked_prims);
-            let bvh = chunked.flatten();
-            let mut flat_prims = bvh.prims.clone();
-            assert_eq!(records, encode(&bvh, &mut flat_prims), "{n}");
-            assert_eq!(chunked_prims, flat_prims, "{n}");
-        }
-    }
-
     #[test]
     fn a_single_leaf_tree_gets_one_record() {
         let boxes = crate::bvh::random_boxes(2, 12345);
-        let bvh = Bvh::build(&boxes);
-        assert_eq!(bvh.nodes.len(), 1);
-        let mut prims = bvh.prims.clone();
-        let records = encode(&bvh, &mut prims);
+        let built = Bvh::build_f32_chunked(2, |i| boxes[i].outward_f32());
+        assert_eq!(built.tree.as_ref().map(|t| t.size()), Some(1));
+        let mut prims = built.prims.clone();
+        let records = encode(&built, &mut prims);
         assert_eq!(records.len(), 1);
         assert_eq!((records[0].left, records[0].right), (LEAF, NONE));
         assert_eq!(prims[1] & PRIM_LAST, PRIM_LAST);
