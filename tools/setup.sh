@@ -14,10 +14,12 @@
 # mirror address is written here. Idempotent: a second run changes nothing.
 set -euo pipefail
 
+want_bench=0 # --bench: the benchmark's peers (tools/peers/setup.sh)
 want_layers=0
 for arg in "$@"; do
   case "$arg" in
     --tests|--ci) want_layers=1 ;;
+    --bench) want_bench=1 ;;
     *) echo "setup.sh: unknown argument '$arg' (expected --tests)" >&2; exit 2 ;;
   esac
 done
@@ -88,3 +90,9 @@ for d in $icd_dirs; do
   for f in "$d"/lvp_icd*.json; do [ -e "$f" ] && echo "setup.sh: lavapipe driver: $f"; done
 done
 dpkg-query -W -f='setup.sh: ${Package} ${Version}\n' mesa-vulkan-drivers 2>/dev/null || true
+
+# --bench: Mitsuba 3 and Embree for the benchmark's peer figures, in a venv under target/
+# (tools/peers/setup.sh says what and why).
+if [ "$want_bench" = 1 ]; then
+  "$(dirname "$0")/peers/setup.sh"
+fi
