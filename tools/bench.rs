@@ -1,6 +1,8 @@
 //! penumbra's benchmark: throughput on the bunny scene, the seminar's
 //! triangle-test claim, scaling with triangles, pixels and lights, the effect
-//! of kernel specialisation, lavapipe's knobs, and a CPU baseline. One run
+//! of kernel specialisation, lavapipe's knobs, a CPU baseline and the peers
+//! (Mitsuba 3 and Embree 4, measured in the same run: `tools/bench/peers.rs`,
+//! after `tools/setup.sh --bench`). One run
 //! writes `docs/bench.md`, `docs/bench.json` and `docs/scaling.png`:
 //!
 //! ```text
@@ -16,8 +18,12 @@
 
 #[path = "bench/cpu.rs"]
 mod cpu;
+#[path = "bench/machine.rs"]
+mod machine;
 #[path = "bench/meshes.rs"]
 mod meshes;
+#[path = "bench/peers.rs"]
+mod peers;
 #[path = "bench/plot.rs"]
 mod plot;
 #[path = "bench/report.rs"]
@@ -57,6 +63,10 @@ pub struct Args {
     /// Skip the lavapipe knob runs (on a GPU they do not apply).
     #[arg(long)]
     no_knobs: bool,
+    /// Skip the peers (Mitsuba 3, Embree 4; `tools/setup.sh --bench`
+    /// installs them): the report then says they were not measured.
+    #[arg(long)]
+    no_peers: bool,
     /// Rewrite bench.md and scaling.png from this bench.json (no
     /// measurement).
     #[arg(long)]
@@ -327,6 +337,12 @@ pub struct Results {
     pub scaling: ScalingPart,
     pub specialise: SpecialisePart,
     pub cpu: CpuPart,
+    /// The CPU, from /proc/cpuinfo.
+    #[serde(default)]
+    pub cpu_info: machine::CpuInfo,
+    /// Mitsuba 3 and Embree 4, interleaved with penumbra in this run.
+    #[serde(default)]
+    pub peers: peers::PeersPart,
 }
 
 // ---------------------------------------------------------------- helpers
@@ -824,6 +840,7 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
         "scaling" => serde_json::to_string(&part_scaling(args)?)?,
         "specialise" => serde_json::to_string(&part_specialise(args)?)?,
         "cpu" => serde_json::to_string(&part_cpu(args)?)?,
+        "peers" => serde_json::to_string(&peers::part(args)?)?,
         _ => bail!("unknown part {part}"),
     };
     std::fs::write(out, json)?;
@@ -1007,6 +1024,18 @@ fn main() -> anyhow::Result<()> {
     results.throughput = best.expect("at least one run").1;
     results.seminar = child(&args, p, "seminar", &[])?;
     results.cpu = child(&args, p, "cpu", &[])?;
+    results.cpu_info = machine::CpuInfo::read();
+    results.peers = if args.no_peers {
+        peers::PeersPart {
+            not_measured: Some("skipped by `--no-peers`".into()),
+            ..Default::default()
+        }
+    } else {
+        child(&args, p, "peers", &[]).unwrap_or_else(|e| peers::PeersPart {
+            not_measured: Some(format!("the peers part failed: {e:#}")),
+            ..Default::default()
+        })
+    };
     results.specialise = child(&args, p, "specialise", &[])?;
     results.scaling = child(&args, p, "scaling", &[])?;
     if !args.no_knobs {
@@ -1178,9 +1207,7 @@ fn profile(args: &Args, parts: &mut Vec<PartInfo>) -> Profile {
 
 /// The report's "what stands in the way" section, from this run's figures.
 pub fn analysis(r: &Results) -> String {
-    let bunny = &r.throughput.scenes[0];
     let cpu = &r.cpu;
-    let base = bunny.render_ms.median;
     let u = cpu.simd8_utilisation;
     let mut o = String::new();
     let jit = r
@@ -1222,9 +1249,8 @@ pub fn analysis(r: &Results) -> String {
         8.0 * u * cpu.gpu_ms.median / cpu.cpu_ms.median
     ));
     o.push_str(&format!(
-        "4. **The peers' advantage.** Embree's 16-ray packets (24.7 ms) and Mitsuba's LLVM variant (38.7 ms) trace coherent bundles with hand-tuned SIMD box tests and keep one traversal stack per packet, not per lane; Embree's single-ray mode (61.2 ms) is still a well-tuned scalar kernel with a wide BVH. penumbra, at {:.1} ms, is {:.1}× Mitsuba's LLVM time. The likely next steps: a wider BVH (four quantised children per record: about half the traversal steps, each with two more texel fetches and two more box tests — a fetch is a call to a function of about 40 instructions, which took 8.3% of a `perf` profile of a running `ab` against 36% for the kernel that calls it), and fewer loads per triangle test (three texel loads and the primitive reference, a storage-buffer load per lane; storing triangles in leaf order would drop the reference, which measured about 2% when the triangles were a storage buffer too). Packet traversal, which the peers use, would need lavapipe to load a subgroup-uniform node once; Mesa 25.0 does not (the {:.0}% utilisation above is not the limit).\n",
-        base,
-        base / 38.7,
+        "{} The likely next steps: a wider BVH (four quantised children per record: about half the traversal steps, each with two more texel fetches and two more box tests — a fetch is a call to a function of about 40 instructions, which took 8.3% of a `perf` profile of a running `ab` against 36% for the kernel that calls it), and fewer loads per triangle test (three texel loads and the primitive reference, a storage-buffer load per lane; storing triangles in leaf order would drop the reference, which measured about 2% when the triangles were a storage buffer too). Packet traversal, which the peers use, would need lavapipe to load a subgroup-uniform node once; Mesa 25.0 does not (the {:.0}% utilisation above is not the limit).\n",
+        peers::advantage(r),
         u * 100.0
     ));
     let knob = |name: &str, value: &str| {

@@ -146,6 +146,7 @@ pub fn markdown(r: &Results) -> String {
     );
     let _ = writeln!(o, "| | |\n|---|---|");
     let _ = writeln!(o, "| Machine | {}, {} cores |", r.machine, r.cores);
+    crate::peers::header_rows(&mut o, r);
     let _ = writeln!(o, "| Device | {} ({}) |", d.name, d.device_type);
     let _ = writeln!(
         o,
@@ -229,11 +230,8 @@ pub fn markdown(r: &Results) -> String {
         f1(min(&sp.specialised.driver_compile_ms)),
         f1(min(&sp.general.driver_compile_ms))
     );
-    let _ = writeln!(
-        o,
-        "| Mitsuba 3 LLVM (the aim): 38.7 ms | penumbra's render phase is **{:.1}×** that |\n",
-        bunny.render_ms.median / 38.7
-    );
+    crate::peers::headline_rows(&mut o, r);
+    let _ = writeln!(o);
 
     // ------------------------------------------------------------ 1
     let _ = writeln!(o, "## 1. Throughput and phases\n");
@@ -548,31 +546,15 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(o, "## 6. Targets\n");
     let _ = writeln!(
         o,
-        "The peers, as given in the issue (measured on this kind of 2-core machine, same scene, 2 threads, medians), against penumbra's render phase on lavapipe from section 1, and against a plain multi-threaded Rust CPU implementation of penumbra's own algorithm measured in this run (`tools/bench/cpu.rs`: the same camera-relative `f32` data and the same BVH tree — over its exact `f32` node boxes, not the kernel's quantised records, and with shadow rays taking the left child first, not the nearer: the kernel's choices would make the port 1.5× and 1.2× slower (module doc of `tools/bench/cpu.rs`), and the target is the port at its best — the same primary rays, nearest-first closest-hit traversal with the same slab test, u,v-first Möller–Trumbore (and the GPU kernel set to `--triangle-test uv-first` for this comparison), Phong shading, the same shadow rays with the same self-skip and Wächter–Binder offset; rows in parallel with rayon on {} threads).\n",
+        "The peers, measured in this run (section 7: the same scene and thread count, frames interleaved with penumbra's; penumbra / it is the median of the per-pair ratios, with their range), against penumbra's render phase on lavapipe from section 1, and against a plain multi-threaded Rust CPU implementation of penumbra's own algorithm measured in this run (`tools/bench/cpu.rs`: the same camera-relative `f32` data and the same BVH tree — over its exact `f32` node boxes, not the kernel's quantised records, and with shadow rays taking the left child first, not the nearer: the kernel's choices would make the port 1.5× and 1.2× slower (module doc of `tools/bench/cpu.rs`), and the target is the port at its best — the same primary rays, nearest-first closest-hit traversal with the same slab test, u,v-first Möller–Trumbore (and the GPU kernel set to `--triangle-test uv-first` for this comparison), Phong shading, the same shadow rays with the same self-skip and Wächter–Binder offset; rows in parallel with rayon on {} threads).\n",
         cpu.threads
     );
-    let base = bunny.render_ms.median;
     let rays = (bunny.primary_rays + bunny.shadow_rays) as f64;
     let _ = writeln!(
         o,
         "| Renderer | ms/frame | Mrays/s (effective) | penumbra / it |\n|---|---|---|---|"
     );
-    let peers = [
-        ("Embree 3, 16-ray packets (issue)", 24.7),
-        ("Mitsuba 3.9.1 LLVM, whole frame (issue; the aim)", 38.7),
-        ("Embree 3, one ray at a time (issue)", 61.2),
-        ("Mitsuba 3.9.1 scalar (issue)", 173.5),
-    ];
-    for (name, t) in peers {
-        let _ = writeln!(
-            o,
-            "| {} | {} | {:.0} | {:.2}× |",
-            name,
-            t,
-            rays / t / 1e3,
-            base / t
-        );
-    }
+    crate::peers::target_rows(&mut o, r, rays);
     let _ = writeln!(
         o,
         "| Rust CPU port, rayon, this run | {} | {:.1} | {:.2}× |",
@@ -616,13 +598,7 @@ pub fn markdown(r: &Results) -> String {
         cpu.max_abs_diff,
         cpu.pixels_over_1e3
     );
-    let _ = writeln!(
-        o,
-        "- **Mitsuba's LLVM back end, 38.7 ms**: penumbra needs {:.1} ms, {:.1}× as long ({:.1} ms to go).\n",
-        base,
-        base / 38.7,
-        base - 38.7
-    );
+    crate::peers::target_bullet(&mut o, r);
     let _ = writeln!(o, "### Where the time goes\n");
     let p = &r.profile;
     match &p.skipped {
@@ -652,8 +628,11 @@ pub fn markdown(r: &Results) -> String {
     }
     let _ = writeln!(o, "### What stands in the way\n");
     o.push_str(&crate::analysis(r));
+    let _ = writeln!(o);
+    crate::peers::section(&mut o, r);
+    crate::peers::standing_section(&mut o, r);
 
-    let _ = writeln!(o, "\n## Machine load during the run\n");
+    let _ = writeln!(o, "## Machine load during the run\n");
     let _ = writeln!(
         o,
         "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. Each part waits (up to 30 s) for a quiet second before it starts, and section 1 is repeated (up to three times) while others used more than half a core, keeping the quietest run. For every measuring process: its own CPU use and everyone else's, averaged over its run (from /proc/stat), in cores. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"

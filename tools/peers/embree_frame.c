@@ -4,9 +4,9 @@
  * ray through every pixel centre (penumbra's camera model), and for every hit
  * whose normal (turned towards the viewer) faces the light, one shadow ray
  * towards the directional light. The rays are traced either one at a time
- * (rtcIntersect1 / rtcOccluded1) or as 16-ray packets of 4x4 pixels
- * (rtcIntersect16 / rtcOccluded16), on `threads` POSIX threads that take rows
- * of 4x4 tiles from a shared counter.
+ * (rtcIntersect1 / rtcOccluded1) or as packets of 4, 8 or 16 neighbouring
+ * pixels (rtcIntersect4/8/16, rtcOccluded4/8/16), on `threads` POSIX threads
+ * that take rows of 4x4-pixel tiles from a shared counter.
  *
  * Built by peers.py with the system C compiler against the libembree4 that
  * the PyPI package embreex ships (it exposes only Embree's single-ray calls to
@@ -45,9 +45,8 @@ void rtcOccluded1(RTCScene s, void *ray, void *args);
 void rtcIntersect16(const int *valid, RTCScene s, void *rayhit, void *args);
 void rtcOccluded16(const int *valid, RTCScene s, void *ray, void *args);
 
-/* RTCRay / RTCRay16 (same field order, N lanes each), then RTCHit / RTCHit16
- * up to geomID. The instance fields after geomID are written by Embree but
- * never read here: the structs below leave room for them (pad). */
+/* RTCRay, then RTCHit up to geomID. The instance fields after geomID are
+ * written by Embree but never read here: the struct leaves room for them. */
 struct ray1 {
   float org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, time, tfar;
   unsigned mask, id, flags;
@@ -58,19 +57,6 @@ struct rayhit1 {
   unsigned prim_id, geom_id;
   unsigned pad[9];
 } __attribute__((aligned(16)));
-struct ray16 {
-  float org_x[16], org_y[16], org_z[16], tnear[16];
-  float dir_x[16], dir_y[16], dir_z[16], time[16];
-  float tfar[16];
-  unsigned mask[16], id[16], flags[16];
-} __attribute__((aligned(64)));
-struct rayhit16 {
-  struct ray16 ray;
-  float ng_x[16], ng_y[16], ng_z[16], u[16], v[16];
-  unsigned prim_id[16], geom_id[16];
-  unsigned pad[8][16];
-} __attribute__((aligned(64)));
-
 static RTCDevice device;
 static RTCScene scene;
 static float *tri_normal; /* unnormalised geometric normal per triangle */
@@ -173,60 +159,76 @@ static void tile_row_single(struct job *j, int ty, struct counts *c) {
     }
 }
 
-static void tile_row_packets(struct job *j, int ty, struct counts *c) {
-  struct rayhit16 rh;
-  struct ray16 sr;
-  int valid[16], svalid[16];
-  float dirs[16][3];
-  for (int tx = 0; tx < (j->width + 3) / 4; tx++) {
-    for (int i = 0; i < 16; i++) {
-      int x = tx * 4 + i % 4, y = ty * 4 + i / 4;
-      valid[i] = (x < j->width && y < j->height) ? -1 : 0;
-      if (!valid[i]) continue;
-      primary(j, x, y, dirs[i]);
-      rh.ray.org_x[i] = j->eye[0];
-      rh.ray.org_y[i] = j->eye[1];
-      rh.ray.org_z[i] = j->eye[2];
-      rh.ray.tnear[i] = 0.0f;
-      rh.ray.dir_x[i] = dirs[i][0];
-      rh.ray.dir_y[i] = dirs[i][1];
-      rh.ray.dir_z[i] = dirs[i][2];
-      rh.ray.time[i] = 0.0f;
-      rh.ray.tfar[i] = INFINITY;
-      rh.ray.mask[i] = ~0u;
-      rh.ray.id[i] = i;
-      rh.ray.flags[i] = 0;
-      rh.geom_id[i] = RTC_INVALID_GEOMETRY_ID;
-    }
-    rtcIntersect16(valid, scene, &rh, NULL);
-    int any = 0;
-    for (int i = 0; i < 16; i++) {
-      svalid[i] = 0;
-      if (!valid[i] || rh.geom_id[i] == RTC_INVALID_GEOMETRY_ID) continue;
-      c->hits++;
-      float org[3];
-      if (!shadow(j, dirs[i], rh.ray.tfar[i], rh.prim_id[i], org)) continue;
-      svalid[i] = -1;
-      any = 1;
-      c->shadow_rays++;
-      sr.org_x[i] = org[0];
-      sr.org_y[i] = org[1];
-      sr.org_z[i] = org[2];
-      sr.tnear[i] = 0.0f;
-      sr.dir_x[i] = j->to_light[0];
-      sr.dir_y[i] = j->to_light[1];
-      sr.dir_z[i] = j->to_light[2];
-      sr.time[i] = 0.0f;
-      sr.tfar[i] = INFINITY;
-      sr.mask[i] = ~0u;
-      sr.id[i] = i;
-      sr.flags[i] = 0;
-    }
-    if (!any) continue;
-    rtcOccluded16(svalid, scene, &sr, NULL);
-    for (int i = 0; i < 16; i++) c->blocked += svalid[i] && sr.tfar[i] < 0.0f;
+/* A packet of `width` (4, 8 or 16) rays as Embree lays out RTCRayHitN:
+ * each field an array of `width` values, the ray's 12 fields first, then the
+ * hit's (Ng x, y, z, u, v, primID, geomID, instance fields). */
+enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TIME = 7, F_TFAR = 8, F_MASK = 9,
+       F_ID = 10, F_FLAGS = 11, F_PRIM = 17, F_GEOM = 18, F_FIELDS = 32 };
+typedef void (*intersect_n)(const int *, RTCScene, void *, void *);
+void rtcIntersect4(const int *valid, RTCScene s, void *rayhit, void *args);
+void rtcOccluded4(const int *valid, RTCScene s, void *ray, void *args);
+void rtcIntersect8(const int *valid, RTCScene s, void *rayhit, void *args);
+void rtcOccluded8(const int *valid, RTCScene s, void *ray, void *args);
+
+static void set_ray(float *p, int width, int i, const float org[3],
+                    const float dir[3]) {
+  unsigned *u = (unsigned *)p;
+  for (int k = 0; k < 3; k++) {
+    p[(F_ORG + k) * width + i] = org[k];
+    p[(F_DIR + k) * width + i] = dir[k];
   }
+  p[F_TNEAR * width + i] = 0.0f;
+  p[F_TIME * width + i] = 0.0f;
+  p[F_TFAR * width + i] = INFINITY;
+  u[F_MASK * width + i] = ~0u;
+  u[F_ID * width + i] = i;
+  u[F_FLAGS * width + i] = 0;
+  u[F_GEOM * width + i] = RTC_INVALID_GEOMETRY_ID;
 }
+
+/* Packets of 4x4 pixels (width 16), 4x2 (8) or 2x2 (4). */
+static void tile_row_packets(struct job *j, int ty, struct counts *c) {
+  int width = j->packets, tw = width == 4 ? 2 : 4, th = width / tw;
+  intersect_n isect = width == 16 ? rtcIntersect16 : width == 8 ? rtcIntersect8 : rtcIntersect4;
+  intersect_n occl = width == 16 ? rtcOccluded16 : width == 8 ? rtcOccluded8 : rtcOccluded4;
+  float rh[F_FIELDS * 16] __attribute__((aligned(64)));
+  float sr[F_FIELDS * 16] __attribute__((aligned(64)));
+  unsigned *geom = (unsigned *)rh + F_GEOM * width, *prim = (unsigned *)rh + F_PRIM * width;
+  int valid[16] __attribute__((aligned(64))), svalid[16] __attribute__((aligned(64)));
+  float dirs[16][3];
+  for (int band = 0; band < 4 / th; band++)
+    for (int tx = 0; tx < (j->width + tw - 1) / tw; tx++) {
+      for (int i = 0; i < width; i++) {
+        int x = tx * tw + i % tw, y = ty * 4 + band * th + i / tw;
+        valid[i] = (x < j->width && y < j->height) ? -1 : 0;
+        if (!valid[i]) continue;
+        primary(j, x, y, dirs[i]);
+        set_ray(rh, width, i, j->eye, dirs[i]);
+      }
+      isect(valid, scene, rh, NULL);
+      int any = 0;
+      for (int i = 0; i < width; i++) {
+        svalid[i] = 0;
+        if (!valid[i] || geom[i] == RTC_INVALID_GEOMETRY_ID) continue;
+        c->hits++;
+        float org[3];
+        if (!shadow(j, dirs[i], rh[F_TFAR * width + i], prim[i], org)) continue;
+        svalid[i] = -1;
+        any = 1;
+        c->shadow_rays++;
+        set_ray(sr, width, i, org, j->to_light);
+      }
+      if (!any) continue;
+      occl(svalid, scene, sr, NULL);
+      for (int i = 0; i < width; i++) c->blocked += svalid[i] && sr[F_TFAR * width + i] < 0.0f;
+    }
+}
+
+/* Embree's rtcGetDeviceProperty: 0 the version (e.g. 40400), 32, 33, 34
+ * whether 4-, 8- and 16-ray packets run natively on this CPU (rtcIntersect16
+ * is called only where 34 says so). */
+long rtcGetDeviceProperty(RTCDevice device, int prop);
+long pe_property(int prop) { return rtcGetDeviceProperty(device, prop); }
 
 struct worker {
   struct job *job;
@@ -248,7 +250,8 @@ static void *work(void *arg) {
   return NULL;
 }
 
-/* One frame: cam = eye, forward, right and up (the last two scaled by the
+/* One frame, `packets` = 0 (one ray at a time) or the packet width (4, 8,
+ * 16): cam = eye, forward, right and up (the last two scaled by the
  * image plane's half extents at distance 1), to_light = unit vector towards
  * the light. Writes hits, shadow rays and blocked shadow rays to out. */
 int pe_frame(int packets, const float cam[12], const float to_light[3],

@@ -15,8 +15,9 @@ shadow ray per hit towards the light:
   mitsuba-scalar  the same frame in Mitsuba's `scalar_rgb` variant.
   embree-single   Embree 4 ray queries, one ray at a time (rtcIntersect1,
                   rtcOccluded1), no shading.
-  embree-packets  the same rays as 16-ray packets of 4x4 pixels
-                  (rtcIntersect16, rtcOccluded16), no shading.
+  embree-packets  the same rays as packets of the widest width this Embree
+                  build runs natively on this CPU (16 rays, 4x4 pixels, with
+                  AVX-512; 8 rays, 4x2 pixels, with AVX2), no shading.
 
 The Embree peers run embree_frame.c (beside this file), compiled on first use
 against the libembree4 that the PyPI package embreex ships; embreex's own
@@ -244,8 +245,9 @@ class Mitsuba:
         dr.set_thread_count(threads)
         self.dr, self.mi, self.scene_in = dr, mi, scene
         self.version = f"mitsuba {mi.__version__}, drjit {dr.__version__}"
+        self.notes = "`direct` integrator, 1 emitter sample, 0 BSDF samples"
         if self.llvm:
-            self.version += f", {os.path.basename(os.path.realpath(self.llvm))}"
+            self.notes += f"; Dr.Jit's LLVM back end on {os.path.realpath(self.llvm)}"
         self.tmp = tempfile.TemporaryDirectory()
         c, l = scene.camera, scene.light
         shapes = {}
@@ -383,7 +385,7 @@ class Embree:
         self.pos, self.tris = np.ascontiguousarray(pos), np.ascontiguousarray(tris)
         from importlib.metadata import version
 
-        self.version = f"embreex {version('embreex')} ({os.path.basename(libpath)})"
+        self.lib.pe_property.restype = ctypes.c_long
         t0 = time.perf_counter()
         p = ctypes.POINTER(ctypes.c_float)
         u = ctypes.POINTER(ctypes.c_uint)
@@ -394,15 +396,31 @@ class Embree:
         if err != 0:
             raise RuntimeError(f"Embree error {err} building the scene")
         self.setup_ms = (time.perf_counter() - t0) * 1e3
+        v = self.lib.pe_property(0)
+        self.version = (
+            f"embreex {version('embreex')}, Embree {v // 10000}.{v // 100 % 100}.{v % 100}"
+        )
+        self.notes = "rtcIntersect1, rtcOccluded1"
+        self.width = 0
+        if packets:
+            native = [w for w, prop in [(16, 34), (8, 33), (4, 32)] if self.lib.pe_property(prop)]
+            if not native:
+                raise RuntimeError("this Embree build runs no ray packets natively")
+            self.width = native[0]
+            tile = {16: "4×4", 8: "4×2", 4: "2×2"}[self.width]
+            self.notes = (
+                f"{self.width}-ray packets of {tile} pixels (rtcIntersect{self.width}, "
+                f"rtcOccluded{self.width}): the widest this Embree build runs natively on this CPU"
+                + ("" if self.width == 16 else " (16-ray packets need AVX-512 in both)")
+            )
         self.cam = (ctypes.c_float * 12)(*scene.camera_vectors())
         self.to_light = (ctypes.c_float * 3)(*scene.light["to_light"])
         self.out = (ctypes.c_uint64 * 3)()
-        self.llvm = None
 
     def frame(self):
         s = self.scene_in
         err = self.lib.pe_frame(
-            1 if self.packets else 0, self.cam, self.to_light,
+            self.width, self.cam, self.to_light,
             s.width, s.height, self.threads, self.out,
         )
         if err != 0:
@@ -451,6 +469,7 @@ def ready_line(peer, p, args, first_ms):
     return {
         "peer": peer,
         "version": p.version,
+        "notes": p.notes,
         "threads": args.threads,
         "width": args.width,
         "height": args.height,
