@@ -29,13 +29,15 @@
 # mirror address is written here. Idempotent: a second run changes nothing.
 set -euo pipefail
 
+want_bench=0 # --bench: the benchmark's peers (tools/peers/setup.sh)
 want_layers=0
 dry_run=0
 for arg in "$@"; do
   case "$arg" in
     --tests|--ci) want_layers=1 ;;
+    --bench) want_bench=1 ;;
     --dry-run) dry_run=1 ;;
-    *) echo "setup.sh: unknown argument '$arg' (expected --tests or --dry-run)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown argument '$arg' (expected --tests, --bench or --dry-run)" >&2; exit 2 ;;
   esac
 done
 fake_devices="${PENUMBRA_SETUP_DEVICES_FILE:-}"
@@ -186,4 +188,10 @@ if [ "$action" != keep ]; then
   parse_devices <<<"$summary" | while IFS='|' read -r type name info; do
     echo "setup.sh: now: $type device: $name${info:+ ($info)}"
   done
+fi
+
+# --bench: Mitsuba 3 and Embree for the benchmark's peer figures, in a venv under target/
+# (tools/peers/setup.sh says what and why).
+if [ "$want_bench" = 1 ]; then
+  "$(dirname "$0")/peers/setup.sh"
 fi
