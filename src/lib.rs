@@ -34,6 +34,7 @@ pub mod output;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod vector_width;
 pub mod vulkan;
 pub mod watch;
 

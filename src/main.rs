@@ -13,6 +13,7 @@ use penumbra::render::{
     Accel, KernelOptions, RenderError, Renderer, RendererOptions, Sampler, Sampling, ShaderSource,
     TriangleTest,
 };
+use penumbra::vector_width;
 use penumbra::vulkan::{Context, DeviceSelector};
 
 #[derive(Parser)]
@@ -104,6 +105,10 @@ struct WatchArgs {
     /// Enable the Khronos validation layer (errors are reported per reload).
     #[arg(long)]
     validate: bool,
+    /// lavapipe's SIMD width in bits: `auto` keeps 256 for compile latency;
+    /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
+    #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
+    vector_width: vector_width::Request,
 }
 
 #[derive(clap::Args)]
@@ -161,6 +166,11 @@ struct RenderArgs {
     /// any of depth, normal, uv, id (comma-separated).
     #[arg(long)]
     aov: Option<output::AovSet>,
+    /// lavapipe's SIMD width in bits: `auto` takes 512 for long renders on
+    /// AVX-512 CPUs, else 256; LP_NATIVE_VECTOR_WIDTH in the environment
+    /// takes precedence.
+    #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
+    vector_width: vector_width::Request,
 }
 
 fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
@@ -195,7 +205,19 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         sampler,
         reference,
         aov,
+        vector_width,
     } = args;
+    // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
+    let vector_width = (!reference).then(|| {
+        vector_width::apply(
+            vector_width,
+            vector_width::Job::Render {
+                pixels: width.zip(height).map(|(w, h)| w as u64 * h as u64),
+                passes: spp,
+                time_budget,
+            },
+        )
+    });
     // Refuse an unwritable output before spending time on the render.
     let format = output::check_writable(&out)?;
     if aov.is_some() && format != output::Format::Exr {
@@ -266,8 +288,13 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let s = &frame.stats;
     let t = &s.timings;
     let dev = renderer.device();
+    // The width matters to CPU devices (lavapipe) only.
+    let width_note = match vector_width {
+        Some(c) if dev.device_type == "CPU" => format!(" | {c}"),
+        _ => String::new(),
+    };
     println!(
-        "{} ({}): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s",
+        "{} ({}): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s{}",
         dev.name,
         dev.device_type,
         frame.image.width,
@@ -285,7 +312,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         ms(t.render),
         ms(t.readback),
         ms(write),
-        s.mrays_per_second()
+        s.mrays_per_second(),
+        width_note
     );
     Ok(())
 }
@@ -386,6 +414,8 @@ fn devices() -> anyhow::Result<()> {
 fn watch(args: WatchArgs) -> anyhow::Result<()> {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
+    // Before the Vulkan driver loads.
+    vector_width::apply(args.vector_width, vector_width::Job::Watch);
     let shaders = match args.shaders {
         Some(dir) => ShaderSource::Directory(dir),
         None => match penumbra::render::compile::checkout_shader_dir() {

@@ -1,0 +1,349 @@
+//! The SIMD width lavapipe compiles the kernel for, chosen for the job.
+//!
+//! lavapipe (llvmpipe) runs a compute shader's invocations in SIMD lanes of
+//! `LP_NATIVE_VECTOR_WIDTH` bits (128, 256 or 512), read once when the driver
+//! loads. Wider vectors trace more rays per instruction but make the driver's
+//! compile of the kernel slower, so the right width depends on the job: a batch
+//! render long enough to repay the longer compile wants 512 bits where the CPU
+//! has AVX-512, while `watch`, where every shader edit waits for the compile,
+//! keeps 256. The figures behind the rule are in docs/drivers.md ("Vector width").
+//!
+//! [`choose`] is the decision as a pure function (CPU features, environment and
+//! job in, width out) so that every branch is testable on any machine; [`apply`]
+//! puts it into the process environment, which must happen before the Vulkan
+//! instance is created. The variable has no effect on GPU drivers.
+
+use std::fmt;
+use std::str::FromStr;
+use std::time::Duration;
+
+/// The environment variable lavapipe reads its vector width from.
+pub const VARIABLE: &str = "LP_NATIVE_VECTOR_WIDTH";
+
+/// A render is "long" (worth 512-bit vectors) from this many primary rays
+/// (width × height × passes) on: 64 passes at 1024×1024.
+pub const LONG_RENDER_PRIMARY_RAYS: u64 = 1 << 26;
+
+/// A render stopped by a time budget shorter than this is never "long": the
+/// longer compile would take too large a share of it.
+pub const LONG_RENDER_MIN_BUDGET: Duration = Duration::from_secs(5);
+
+/// The pixel count assumed when the command line does not give the size
+/// (`--width` and `--height`): the benchmark's 1024×1024. The scene's own size
+/// is not known yet when the width must be chosen (before the device is made).
+pub const ASSUMED_PIXELS: u64 = 1 << 20;
+
+/// What `--vector-width` asked for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Request {
+    /// Choose by CPU and job ([`choose`]).
+    #[default]
+    Auto,
+    /// This many bits: 128, 256 or 512.
+    Bits(u32),
+}
+
+impl FromStr for Request {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Request, String> {
+        match s {
+            "auto" => Ok(Request::Auto),
+            "128" => Ok(Request::Bits(128)),
+            "256" => Ok(Request::Bits(256)),
+            "512" => Ok(Request::Bits(512)),
+            _ => Err(format!("expected auto, 128, 256 or 512, got `{s}`")),
+        }
+    }
+}
+
+/// The vector instruction sets of the CPU that decide the width.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CpuVectors {
+    /// 256-bit AVX (AVX2 or plain AVX): lavapipe's default width is 256 with it.
+    pub avx: bool,
+    /// AVX-512 Foundation: 512-bit vectors run natively.
+    pub avx512f: bool,
+}
+
+impl CpuVectors {
+    /// This CPU's, as the operating system lets programs use them.
+    pub fn detect() -> CpuVectors {
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            CpuVectors {
+                avx: std::arch::is_x86_feature_detected!("avx"),
+                avx512f: std::arch::is_x86_feature_detected!("avx512f"),
+            }
+        }
+        #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+        {
+            CpuVectors::default()
+        }
+    }
+
+    /// The instruction sets Mesa will target: `GALLIUM_OVERRIDE_CPU_CAPS`
+    /// (e.g. `avx`) caps them, so AVX-512 counts only if the override names it.
+    pub fn capped_by(self, gallium_override: Option<&str>) -> CpuVectors {
+        match gallium_override {
+            Some(caps) if !caps.contains("avx512") => CpuVectors {
+                avx: self.avx && caps.contains("avx"),
+                avx512f: false,
+            },
+            _ => self,
+        }
+    }
+}
+
+/// The kind of work the driver will compile for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Job {
+    /// A one-off batch render (`penumbra render`).
+    Render {
+        /// Width × height, if the command line gives both; else [`ASSUMED_PIXELS`].
+        pixels: Option<u64>,
+        /// Passes (`--spp`).
+        passes: u32,
+        /// `--time-budget`, which may stop the render early.
+        time_budget: Option<Duration>,
+    },
+    /// Hot reload (`penumbra watch`): compile latency matters most.
+    Watch,
+}
+
+impl Job {
+    /// Whether a render is long enough to repay 512-bit vectors' longer compile.
+    pub fn is_long(&self) -> bool {
+        match *self {
+            Job::Render {
+                pixels,
+                passes,
+                time_budget,
+            } => {
+                let rays = pixels
+                    .unwrap_or(ASSUMED_PIXELS)
+                    .saturating_mul(passes as u64);
+                rays >= LONG_RENDER_PRIMARY_RAYS
+                    && time_budget.is_none_or(|b| b >= LONG_RENDER_MIN_BUDGET)
+            }
+            Job::Watch => false,
+        }
+    }
+}
+
+/// Why the width is what it is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Reason {
+    /// `LP_NATIVE_VECTOR_WIDTH` was already set by the user: always respected.
+    Environment,
+    /// `--vector-width N`.
+    Flag,
+    /// Auto: AVX-512 and a long render.
+    LongRenderWithAvx512,
+    /// Auto: AVX-512, but the render is too short to repay the compile.
+    ShortRender,
+    /// Auto: `watch` keeps 256 for compile latency.
+    Watch,
+    /// Auto: no AVX-512 on this CPU.
+    NoAvx512,
+    /// Auto: no AVX either; the driver's default (128) is left alone.
+    NoAvx,
+}
+
+/// The chosen width and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Choice {
+    /// The width in bits that the process will run lavapipe with; `None` when
+    /// the variable is left unset and the driver picks its default.
+    pub bits: Option<u32>,
+    /// The user's own value of `LP_NATIVE_VECTOR_WIDTH`, verbatim, when it was set.
+    pub user_value: Option<String>,
+    /// Why.
+    pub reason: Reason,
+}
+
+impl fmt::Display for Choice {
+    /// The summary line's phrase, e.g. `vector width 512 (auto: AVX-512, long render)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (&self.user_value, self.bits) {
+            (Some(v), _) => write!(f, "vector width {v}")?,
+            (None, Some(b)) => write!(f, "vector width {b}")?,
+            (None, None) => write!(f, "vector width driver default")?,
+        }
+        let why = match self.reason {
+            Reason::Environment => "LP_NATIVE_VECTOR_WIDTH set",
+            Reason::Flag => "--vector-width",
+            Reason::LongRenderWithAvx512 => "auto: AVX-512, long render",
+            Reason::ShortRender => "auto: AVX-512, short render",
+            Reason::Watch => "auto: watch",
+            Reason::NoAvx512 => "auto: no AVX-512",
+            Reason::NoAvx => "auto: no AVX",
+        };
+        write!(f, " ({why})")
+    }
+}
+
+/// Chooses the width: the user's `LP_NATIVE_VECTOR_WIDTH` (`env`) first, then
+/// `--vector-width`, else by CPU and job — 512 for a long render
+/// ([`Job::is_long`]) on a CPU with AVX-512, 256 on any CPU with AVX
+/// otherwise (`watch` included), and the driver's default without AVX.
+pub fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) -> Choice {
+    if let Some(v) = env {
+        return Choice {
+            bits: v.trim().parse().ok(),
+            user_value: Some(v.to_owned()),
+            reason: Reason::Environment,
+        };
+    }
+    let (bits, reason) = match request {
+        Request::Bits(b) => (Some(b), Reason::Flag),
+        Request::Auto if !cpu.avx => (None, Reason::NoAvx),
+        Request::Auto if job == Job::Watch => (Some(256), Reason::Watch),
+        Request::Auto if !cpu.avx512f => (Some(256), Reason::NoAvx512),
+        Request::Auto if job.is_long() => (Some(512), Reason::LongRenderWithAvx512),
+        Request::Auto => (Some(256), Reason::ShortRender),
+    };
+    Choice {
+        bits,
+        user_value: None,
+        reason,
+    }
+}
+
+/// Chooses for this process ([`choose`] with this CPU and environment) and sets
+/// `LP_NATIVE_VECTOR_WIDTH` accordingly. Call it before the Vulkan instance is
+/// created (lavapipe reads the variable when it loads) and while no other
+/// thread reads the environment: early in `main`.
+pub fn apply(request: Request, job: Job) -> Choice {
+    let env = std::env::var(VARIABLE).ok();
+    let gallium = std::env::var("GALLIUM_OVERRIDE_CPU_CAPS").ok();
+    let cpu = CpuVectors::detect().capped_by(gallium.as_deref());
+    let choice = choose(request, env.as_deref(), cpu, job);
+    if choice.user_value.is_none() {
+        if let Some(b) = choice.bits {
+            std::env::set_var(VARIABLE, b.to_string());
+        }
+    }
+    choice
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ZEN3: CpuVectors = CpuVectors {
+        avx: true,
+        avx512f: false,
+    };
+    const ZEN4: CpuVectors = CpuVectors {
+        avx: true,
+        avx512f: true,
+    };
+    const SSE_ONLY: CpuVectors = CpuVectors {
+        avx: false,
+        avx512f: false,
+    };
+
+    fn render(pixels: Option<u64>, passes: u32, budget: Option<u64>) -> Job {
+        Job::Render {
+            pixels,
+            passes,
+            time_budget: budget.map(Duration::from_secs),
+        }
+    }
+
+    #[test]
+    fn long_renders_on_avx512_get_512() {
+        let c = choose(Request::Auto, None, ZEN4, render(None, 64, None));
+        assert_eq!(c.bits, Some(512));
+        assert_eq!(
+            c.to_string(),
+            "vector width 512 (auto: AVX-512, long render)"
+        );
+        // 1920x1080 at 33 passes is past 2^26 primary rays; at 32 it is not.
+        let hd = Some(1920 * 1080);
+        assert_eq!(
+            choose(Request::Auto, None, ZEN4, render(hd, 33, None)).bits,
+            Some(512)
+        );
+        assert_eq!(
+            choose(Request::Auto, None, ZEN4, render(hd, 32, None)).reason,
+            Reason::ShortRender
+        );
+    }
+
+    #[test]
+    fn short_renders_and_watch_keep_256() {
+        let c = choose(Request::Auto, None, ZEN4, render(None, 63, None));
+        assert_eq!((c.bits, c.reason), (Some(256), Reason::ShortRender));
+        let c = choose(Request::Auto, None, ZEN4, render(Some(64 * 64), 1024, None));
+        assert_eq!(
+            c.bits,
+            Some(256),
+            "64x64 at 1024 passes is 2^22 rays: short"
+        );
+        let c = choose(
+            Request::Auto,
+            None,
+            ZEN4,
+            render(Some(64 * 64), 1 << 16, None),
+        );
+        assert_eq!(
+            c.bits,
+            Some(512),
+            "64x64 at 65536 passes is 2^28 rays: long"
+        );
+        let c = choose(Request::Auto, None, ZEN4, Job::Watch);
+        assert_eq!(c.to_string(), "vector width 256 (auto: watch)");
+        // A time budget under 5 s caps the render's length.
+        let c = choose(Request::Auto, None, ZEN4, render(None, 1000, Some(4)));
+        assert_eq!(c.reason, Reason::ShortRender);
+        let c = choose(Request::Auto, None, ZEN4, render(None, 1000, Some(5)));
+        assert_eq!(c.bits, Some(512));
+    }
+
+    #[test]
+    fn without_avx512_it_is_256_and_without_avx_the_default() {
+        let c = choose(Request::Auto, None, ZEN3, render(None, 1000, None));
+        assert_eq!(c.to_string(), "vector width 256 (auto: no AVX-512)");
+        let c = choose(Request::Auto, None, SSE_ONLY, render(None, 1000, None));
+        assert_eq!(c.to_string(), "vector width driver default (auto: no AVX)");
+        assert_eq!(choose(Request::Auto, None, SSE_ONLY, Job::Watch).bits, None);
+    }
+
+    #[test]
+    fn the_flag_overrides_and_the_environment_wins() {
+        let c = choose(Request::Bits(128), None, ZEN4, render(None, 1000, None));
+        assert_eq!(c.to_string(), "vector width 128 (--vector-width)");
+        let c = choose(Request::Bits(512), None, ZEN3, Job::Watch);
+        assert_eq!(c.bits, Some(512));
+        let c = choose(Request::Bits(128), Some("512"), ZEN3, Job::Watch);
+        assert_eq!(
+            c.to_string(),
+            "vector width 512 (LP_NATIVE_VECTOR_WIDTH set)"
+        );
+        assert_eq!(c.bits, Some(512));
+        let c = choose(Request::Auto, Some("weird"), ZEN4, render(None, 1000, None));
+        assert_eq!((c.bits, c.user_value.as_deref()), (None, Some("weird")));
+    }
+
+    #[test]
+    fn gallium_override_caps_avx512() {
+        assert_eq!(ZEN4.capped_by(Some("avx")), ZEN3);
+        assert_eq!(ZEN4.capped_by(Some("avx512")), ZEN4);
+        assert_eq!(ZEN4.capped_by(Some("sse4.1")), SSE_ONLY);
+        assert_eq!(ZEN4.capped_by(None), ZEN4);
+        let cpu = ZEN4.capped_by(Some("avx"));
+        assert_eq!(
+            choose(Request::Auto, None, cpu, render(None, 64, None)).bits,
+            Some(256)
+        );
+    }
+
+    #[test]
+    fn requests_parse_and_bad_ones_are_refused() {
+        assert_eq!("auto".parse(), Ok(Request::Auto));
+        assert_eq!("512".parse(), Ok(Request::Bits(512)));
+        assert!("300".parse::<Request>().unwrap_err().contains("300"));
+        assert!("".parse::<Request>().is_err());
+    }
+}
