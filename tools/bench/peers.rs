@@ -577,6 +577,13 @@ pub fn section(o: &mut String, r: &Results) {
         p.threads,
         p.rounds
     );
+    if let Some(part) = r.parts.iter().find(|x| x.part == "peers") {
+        let _ = writeln!(
+            o,
+            "This part took {:.0} s while other processes used {:.2} cores on average (the last table); interleaving keeps that from deciding a ratio, not from slowing both sides.\n",
+            part.wall_s, part.other_cores
+        );
+    }
     let _ = writeln!(
         o,
         "**Same scene?** A peer's comparison is void unless its primary hit count equals penumbra's and its blocked shadow rays are within {:.0}% of penumbra's. Shadow-ray totals differ by definition: Mitsuba's direct integrator samples the light at every hit, penumbra and the Embree peers only where the normal faces the light.\n",

@@ -247,6 +247,7 @@ class Mitsuba:
         self.version = f"mitsuba {mi.__version__}, drjit {dr.__version__}"
         self.notes = "`direct` integrator, 1 emitter sample, 0 BSDF samples"
         if self.llvm:
+            self.version += f", {os.path.basename(os.path.realpath(self.llvm))}"
             self.notes += f"; Dr.Jit's LLVM back end on {os.path.realpath(self.llvm)}"
         self.tmp = tempfile.TemporaryDirectory()
         c, l = scene.camera, scene.light
