@@ -848,16 +848,19 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// This process's user + system CPU time in clock ticks (1/100 s).
+/// This process's user + system CPU time in clock ticks (1/100 s), with
+/// that of its children it has waited for (the peers' processes), so that
+/// they count as the benchmark's own load, not as other processes'.
 fn own_ticks() -> u64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // utime and stime: the 12th and 13th fields after the command name.
+    // utime, stime, cutime, cstime: the 12th to 15th fields after the
+    // command name.
     let rest = stat.rsplit_once(')').map_or("", |r| r.1);
     let f: Vec<u64> = rest
         .split_whitespace()
         .map(|x| x.parse().unwrap_or(0))
         .collect();
-    f.get(11).copied().unwrap_or(0) + f.get(12).copied().unwrap_or(0)
+    (11..15).map(|i| f.get(i).copied().unwrap_or(0)).sum()
 }
 
 /// Waits (at most 30 s per part and 120 s per run) until other processes
