@@ -765,7 +765,15 @@ pub fn standing_section(o: &mut String, r: &Results) {
             zen4
         );
     }
-    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
+        "\nThe knob is the environment variable lavapipe reads when it loads (section 5); `penumbra render --vector-width auto` (`src/vector_width.rs`) sets it to 512 only for long renders on a CPU with AVX-512, and this CPU {}.\n",
+        if r.cpu_info.avx512() {
+            "has AVX-512"
+        } else {
+            "has none, so auto keeps 256 here"
+        }
+    );
     let _ = writeln!(o, "{}\n", machines_paragraph(r));
 }
 
