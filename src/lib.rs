@@ -31,6 +31,7 @@ pub mod error;
 pub mod loaders;
 pub mod metrics;
 pub mod output;
+pub mod panics;
 pub mod reference;
 pub mod render;
 pub mod scene;

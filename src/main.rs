@@ -109,6 +109,35 @@ struct WatchArgs {
     /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
+    #[command(flatten)]
+    limits: LimitArgs,
+}
+
+/// What a scene may make the loader read and hold (src/loaders/guard.rs).
+#[derive(clap::Args, Clone, Copy)]
+struct LimitArgs {
+    /// Refuse every file the scene references outside the scene file's folder
+    /// (after resolving `..` and symbolic links): for untrusted scenes.
+    #[arg(long)]
+    restrict_paths: bool,
+    /// Most memory, in MiB, that the scene's files and loaded geometry may take;
+    /// checked before anything is expanded.
+    #[arg(long, value_name = "MIB", default_value_t = loaders::guard::DEFAULT_MAX_SCENE_BYTES >> 20,
+          value_parser = clap::value_parser!(u64).range(1..=1 << 30))]
+    max_scene_memory: u64,
+}
+
+impl LimitArgs {
+    /// Load options with these limits and the size overrides.
+    fn load_options(self, width: Option<u32>, height: Option<u32>) -> LoadOptions {
+        LoadOptions {
+            width,
+            height,
+            restrict_paths: self.restrict_paths,
+            max_scene_bytes: self.max_scene_memory << 20,
+            ..Default::default()
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -171,6 +200,8 @@ struct RenderArgs {
     /// takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
+    #[command(flatten)]
+    limits: LimitArgs,
 }
 
 fn parse_seconds(s: &str) -> Result<std::time::Duration, String> {
@@ -206,6 +237,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         reference,
         aov,
         vector_width,
+        limits,
     } = args;
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
     let vector_width = (!reference).then(|| {
@@ -226,45 +258,54 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             out.display()
         );
     }
-    let t0 = Instant::now();
-    let loaded = loaders::load_scene(&scene, &LoadOptions { width, height })?;
-    let load = t0.elapsed();
-    for note in &loaded.notes {
-        eprintln!("note: {note}");
-    }
     let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
-    let mut scene_data = loaded.scene;
-    if let Some(n) = area_samples {
-        for l in &mut scene_data.lights {
-            l.kind.set_samples(n);
-        }
-    }
     let kernel = KernelOptions {
         accel,
         triangle_test,
         sampler,
         ..Default::default()
     };
-    if reference {
+    // The device first, so that the loader refuses a scene the device cannot
+    // hold before expanding it.
+    let mut renderer = match reference {
+        true => None,
+        false => Some(Renderer::new(&RendererOptions {
+            device,
+            validation: validate,
+            shaders,
+            kernel,
+        })?),
+    };
+    let mut load_options = limits.load_options(width, height);
+    if let Some(r) = &renderer {
+        load_options.max_triangles = r.max_triangles();
+    }
+    let t0 = Instant::now();
+    let loaded = loaders::load_scene(&scene, &load_options)?;
+    let load = t0.elapsed();
+    for note in &loaded.notes {
+        eprintln!("note: {note}");
+    }
+    let mut scene_data = loaded.scene;
+    if let Some(n) = area_samples {
+        for l in &mut scene_data.lights {
+            l.kind.set_samples(n);
+        }
+    }
+    let Some(renderer) = renderer.as_mut() else {
         let sampling = Sampling {
             spp,
             seed,
             time_budget,
         };
         return render_reference(&scene_data, &sampling, &kernel, &out, load, aov);
-    }
-    let mut renderer = Renderer::new(&RendererOptions {
-        device,
-        validation: validate,
-        shaders,
-        kernel,
-    })?;
+    };
     let sampling = Sampling {
         spp,
         seed,
         time_budget,
     };
-    let (frame, aovs) = render_with_progress(&mut renderer, &scene_data, &sampling, aov.is_some())
+    let (frame, aovs) = render_with_progress(renderer, &scene_data, &sampling, aov.is_some())
         .map_err(|e| match e {
             // Device limits name a scene field: say which file.
             RenderError::Scene { field, message } => {
@@ -433,10 +474,7 @@ fn watch(args: WatchArgs) -> anyhow::Result<()> {
         shaders,
         kernel: KernelOptions::default(),
     };
-    opts.load = LoadOptions {
-        width: args.width,
-        height: args.height,
-    };
+    opts.load = args.limits.load_options(args.width, args.height);
     opts.serve = args.serve;
     opts.preview_divisor = args.preview;
     opts.debounce = std::time::Duration::from_millis(args.debounce_ms);
@@ -451,17 +489,28 @@ fn watch(args: WatchArgs) -> anyhow::Result<()> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    // A panic is a bug, not a way to report input: should one still happen,
+    // one `error:` line names the file, the panic unwinds (removing any
+    // temporary output file) and the exit status is 70 (EX_SOFTWARE).
+    penumbra::panics::install_hook();
+    match &cli.command {
+        Command::Render(a) => penumbra::panics::set_subject(a.scene.clone()),
+        Command::Watch(a) => penumbra::panics::set_subject(a.scene.clone()),
+        Command::Diff(a) => penumbra::panics::set_subject(a.b.clone()),
+        Command::Devices => {}
+    }
+    let run = std::panic::catch_unwind(|| match cli.command {
         Command::Render(args) => render(args),
         Command::Devices => devices(),
         Command::Watch(args) => watch(args),
         Command::Diff(args) => diff(args),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
+    });
+    match run {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+        Err(_) => ExitCode::from(70),
     }
 }

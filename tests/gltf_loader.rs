@@ -449,7 +449,16 @@ fn camera_doc(camera: Value) -> Doc {
 }
 
 fn size(doc: &Doc, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
-    let c = load_doc(doc, &LoadOptions { width, height }).scene.camera;
+    let c = load_doc(
+        doc,
+        &LoadOptions {
+            width,
+            height,
+            ..Default::default()
+        },
+    )
+    .scene
+    .camera;
     (c.width, c.height)
 }
 
@@ -718,7 +727,14 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
         (Some(1000), Some(100)),
         (Some(100), Some(1000)),
     ] {
-        let loaded = load_doc(&doc, &LoadOptions { width, height });
+        let loaded = load_doc(
+            &doc,
+            &LoadOptions {
+                width,
+                height,
+                ..Default::default()
+            },
+        );
         let notes = &loaded.notes;
         assert_eq!(
             notes_with(notes, ": using a framing camera"),
@@ -941,6 +957,7 @@ fn bunny_scene_glb() {
     let opts = LoadOptions {
         width: Some(1024),
         height: Some(1024),
+        ..Default::default()
     };
     let loaded = gltf::load(Path::new(BUNNY_SCENE), &opts).unwrap_or_else(|e| panic!("{e}"));
     let scene = &loaded.scene;

@@ -59,6 +59,7 @@ fn load_sized(name: &str, width: u32, height: u32) -> Scene {
         &LoadOptions {
             width: Some(width),
             height: Some(height),
+            ..Default::default()
         },
     )
     .unwrap_or_else(|e| panic!("{e}"))

@@ -47,6 +47,7 @@ fn load(name: &str, width: u32, height: u32) -> anyhow::Result<Scene> {
     let opts = LoadOptions {
         width: Some(width),
         height: Some(height),
+        ..Default::default()
     };
     Ok(load_scene(&path, &opts)?.scene)
 }

@@ -119,6 +119,7 @@ fn main() -> anyhow::Result<()> {
     let load = LoadOptions {
         width: Some(SIZE.0),
         height: Some(SIZE.1),
+        ..Default::default()
     };
 
     let mut opts = WatchOptions::new(&scene, &out);

@@ -21,6 +21,7 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::{Mode, Semantic};
 use gltf::scene::Transform;
 
+use super::guard::Guard;
 use super::{LoadOptions, Loaded};
 use crate::scene::{
     Camera, Light, LightKind, Mesh, Object, Phong, Projection, Scene, Shader, Shape,
@@ -68,15 +69,21 @@ pub struct GltfDocument {
     pub files: Vec<PathBuf>,
 }
 
-/// Reads the file's default scene (its `scene`, else scene 0).
+/// Reads the file's default scene (its `scene`, else scene 0), with the
+/// default limits of [`LoadOptions`].
 pub fn read(path: &Path) -> Result<GltfDocument> {
-    read_scene(path).map(|(doc, _)| doc)
+    read_with(path, &Guard::new(path, &LoadOptions::default()))
+}
+
+/// [`read`] under the limits of `guard`, shared with the scene that names this file.
+pub fn read_with(path: &Path, guard: &Guard) -> Result<GltfDocument> {
+    read_scene(path, guard).map(|(doc, _)| doc)
 }
 
 /// `penumbra render model.glb`: the whole scene from a glTF file, with a
 /// framing camera and a default light when the file has none.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    let (doc, scene_index) = read_scene(path)?;
+    let (doc, scene_index) = read_scene(path, &Guard::new(path, opts))?;
     let mut notes = doc.notes;
     if doc.meshes.iter().all(|m| m.mesh.indices.is_empty()) {
         let field = scene_index.map_or("scenes".into(), |k| format!("scenes[{k}]"));
@@ -216,53 +223,75 @@ fn default_light(camera: &Camera) -> Light {
 }
 
 /// [`read`], also returning the index of the scene used (`None`: the file has no scene).
-fn read_scene(path: &Path) -> Result<(GltfDocument, Option<usize>)> {
-    let data = std::fs::read(path)
-        .map_err(|e| SceneError::new(path, "", format!("cannot read the glTF file: {e}")))?;
+fn read_scene(path: &Path, guard: &Guard) -> Result<(GltfDocument, Option<usize>)> {
+    let data = guard
+        .read(path, "glTF file")
+        .map_err(|e| SceneError::new(path, "", e.0))?;
     let (json, blob) = if data.starts_with(b"glTF") {
         split_glb(path, &data)?
     } else {
         (&data[..], None)
     };
     let document = parse_json(path, json)?;
-    let doc = GltfDocument {
-        meshes: vec![],
-        camera: None,
-        lights: vec![],
-        notes: vec![],
-        files: vec![path.to_path_buf()],
-    };
+    let doc = empty_document(path);
     let mut r = Reader {
         file: path,
+        guard,
         buffers: Vec::new(),
         doc,
         flags: Flags::default(),
+        at: String::new(),
     };
-    r.load_buffers(&document, blob)?;
+    // The `gltf` crate's accessors unwrap what its validation should have
+    // checked; should one still panic, it becomes an error naming the file
+    // and the field being read rather than a crash.
+    let walked = crate::panics::catch(|| walk(&mut r, &document, blob));
+    match walked {
+        Ok(result) => result,
+        Err(panic) => Err(SceneError::new(
+            path,
+            std::mem::take(&mut r.at),
+            format!("internal error in the glTF reader ({panic}); please report this file"),
+        )),
+    }
+}
+
+/// Reads the buffers and walks the default scene of a parsed document.
+fn walk(
+    r: &mut Reader,
+    document: &gltf::Document,
+    blob: Option<Vec<u8>>,
+) -> Result<(GltfDocument, Option<usize>)> {
+    let path = r.file;
+    r.load_buffers(document, blob)?;
     let Some(scene) = document
         .default_scene()
         .or_else(|| document.scenes().next())
     else {
-        return Ok((r.doc, None));
+        return Ok((std::mem::replace(&mut r.doc, empty_document(path)), None));
     };
     r.flags.animated = document.animations().len() > 0;
 
-    // Depth first with children in file order; a stack rather than recursion,
-    // as a long chain of nodes is legal.
-    let mut visited = vec![false; document.nodes().len()];
-    let mut stack: Vec<_> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
-    stack.reverse();
-    while let Some((node, parent)) = stack.pop() {
-        if std::mem::replace(&mut visited[node.index()], true) {
-            // glTF requires disjoint trees; this also stops cycles.
-            let message = format!("is reached twice from scene {}", scene.index());
-            return r.fail(format!("nodes[{}]", node.index()), message);
+    let order = scene_nodes(&scene, document.nodes().len()).map_err(|node| {
+        // glTF requires disjoint trees; this also stops cycles.
+        let message = format!("is reached twice from scene {}", scene.index());
+        r.err(format!("nodes[{node}]"), message)
+    })?;
+    // Every instanced primitive is admitted to the budget before any is read.
+    for (node, _) in &order {
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+                r.charge(&prim, &field)?;
+            }
         }
-        let world = parent * r.local_transform(&node)?;
-        r.node(&node, &world)?;
-        let first = stack.len();
-        stack.extend(node.children().map(|c| (c, world)));
-        stack[first..].reverse();
+    }
+    let mut worlds = Vec::with_capacity(order.len());
+    for (node, parent) in &order {
+        let parent = parent.map_or(DMat4::IDENTITY, |p| worlds[p]);
+        let world = parent * r.local_transform(node)?;
+        r.node(node, &world)?;
+        worlds.push(world);
     }
 
     let (file, f, notes) = (path.display(), r.flags, &mut r.doc.notes);
@@ -285,7 +314,43 @@ fn read_scene(path: &Path) -> Result<(GltfDocument, Option<usize>)> {
         let note = "light range is ignored: penumbra uses pure inverse-square falloff";
         notes.push(format!("{file}: {note}"));
     }
-    Ok((r.doc, Some(scene.index())))
+    let doc = std::mem::replace(&mut r.doc, empty_document(path));
+    Ok((doc, Some(scene.index())))
+}
+
+/// The nodes of `scene` depth first, children in file order, each with the
+/// position of its parent in the list; `Err(node)` for a node reached twice.
+/// A stack rather than recursion, as a long chain of nodes is legal.
+fn scene_nodes<'d>(
+    scene: &gltf::Scene<'d>,
+    count: usize,
+) -> std::result::Result<Vec<(gltf::Node<'d>, Option<usize>)>, usize> {
+    let mut visited = vec![false; count];
+    let mut order = Vec::new();
+    let mut stack: Vec<_> = scene.nodes().map(|n| (n, None)).collect();
+    stack.reverse();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return Err(node.index());
+        }
+        let at = order.len();
+        let first = stack.len();
+        stack.extend(node.children().map(|c| (c, Some(at))));
+        stack[first..].reverse();
+        order.push((node, parent));
+    }
+    Ok(order)
+}
+
+/// A document with nothing read yet but the file itself.
+fn empty_document(path: &Path) -> GltfDocument {
+    GltfDocument {
+        meshes: vec![],
+        camera: None,
+        lights: vec![],
+        notes: vec![],
+        files: vec![path.to_path_buf()],
+    }
 }
 
 /// Splits a binary glTF into its JSON chunk and optional BIN chunk, checking
@@ -351,6 +416,7 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
             }
         }
     }
+    check_cameras(path, &root)?;
     gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let more = match errors.len() {
@@ -364,6 +430,29 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
         }
         other => SceneError::new(path, "", format!("invalid glTF: {other}")),
     })
+}
+
+/// Each camera carries the projection object its `type` names: gltf-json
+/// 1.4.1's validation does not check this, and `Camera::projection` unwraps it.
+fn check_cameras(path: &Path, root: &gltf::json::Root) -> Result<()> {
+    use gltf::json::camera::Type;
+    for (i, c) in root.cameras.iter().enumerate() {
+        let (name, present) = match c.type_ {
+            Checked::Valid(Type::Perspective) => ("perspective", c.perspective.is_some()),
+            Checked::Valid(Type::Orthographic) => ("orthographic", c.orthographic.is_some()),
+            // An unknown type is reported by the crate's own validation.
+            Checked::Invalid => continue,
+        };
+        if !present {
+            let message = format!("the camera's type is \"{name}\" but it has no `{name}` object");
+            return Err(SceneError::new(
+                path,
+                format!("cameras[{i}].{name}"),
+                message,
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The `gltf` crate's field path spelled as in the file and in this module's
@@ -386,6 +475,9 @@ struct Flags {
 /// Walks one document: its buffers, then the nodes of the default scene.
 struct Reader<'a> {
     file: &'a Path,
+    guard: &'a Guard,
+    /// The field being read, for an error should a dependency panic.
+    at: String,
     /// One per `buffers[i]`, exactly `byteLength` long.
     buffers: Vec<Vec<u8>>,
     doc: GltfDocument,
@@ -424,9 +516,10 @@ impl Reader<'_> {
                         return self.fail(f(".uri"), message);
                     };
                     let file = base.join(relative);
-                    let data = std::fs::read(&file).map_err(|e| {
-                        self.err(f(".uri"), format!("cannot read {}: {e}", file.display()))
-                    })?;
+                    let data = self
+                        .guard
+                        .read(&file, "buffer")
+                        .map_err(|e| self.err(f(".uri"), e.0))?;
                     self.doc.files.push(file);
                     data
                 }
@@ -482,12 +575,14 @@ impl Reader<'_> {
             };
             for prim in mesh.primitives() {
                 let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+                self.at.clone_from(&field);
                 let name = format!("{label} primitive {}", prim.index());
                 if let Some(m) = self.primitive(&prim, world, &field, name)? {
                     self.doc.meshes.push(m);
                 }
             }
         }
+        self.at = format!("nodes[{}]", node.index());
         if let (Some(camera), None) = (node.camera(), self.doc.camera) {
             self.doc.camera = Some(self.camera(&camera, world, node.index())?);
         }
@@ -547,6 +642,29 @@ impl Reader<'_> {
             base_color,
             name,
         }))
+    }
+
+    /// Admits a triangle primitive to the scene's memory budget and triangle
+    /// limit before any of its data is read; an instanced mesh is charged
+    /// once per instance. Points and lines are skipped, so cost nothing.
+    fn charge(&self, prim: &gltf::Primitive, field: &str) -> Result<()> {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            return Ok(());
+        }
+        let vertices = prim.get(&Semantic::Positions).map_or(0, |a| a.count()) as u64;
+        let normals = prim.get(&Semantic::Normals).is_some();
+        let indices = prim.indices().map_or(vertices, |a| a.count() as u64);
+        let triangles = match mode {
+            Mode::Triangles => indices / 3,
+            _ => indices.saturating_sub(2),
+        };
+        self.guard
+            .charge(vertices, normals, indices, triangles)
+            .map_err(|e| self.err(field, e.0))
     }
 
     /// World-space positions, all finite.

@@ -557,7 +557,11 @@ impl Reader<'_> {
 
 /// Reads a JSON scene file.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
-    let text = std::fs::read_to_string(path)
+    let guard = super::guard::Guard::new(path, opts);
+    let bytes = guard
+        .read(path, "scene")
+        .map_err(|e| SceneError::new(path, "", e.0))?;
+    let text = String::from_utf8(bytes)
         .map_err(|e| SceneError::new(path, "", format!("cannot read scene: {e}")))?;
     let de = &mut serde_json::Deserializer::from_str(&text);
     let file: SceneFile = serde_path_to_error::deserialize(de).map_err(|e| {
@@ -643,13 +647,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
                 if !mesh_path.is_file() {
                     return Err(r.err(f("file"), format!("no such file: {}", mesh_path.display())));
                 }
+                guard
+                    .check_path(&mesh_path, "mesh file")
+                    .map_err(|e| r.err(f("file"), e.0))?;
                 let m = o
                     .transform
                     .as_ref()
                     .map(|t| r.transform(&f("transform"), t))
                     .transpose()?
                     .unwrap_or(DMat4::IDENTITY);
-                let doc = super::gltf::read(&mesh_path)?;
+                let doc = super::gltf::read_with(&mesh_path, &guard)?;
                 notes.extend(doc.notes);
                 files.extend(doc.files);
                 let normal_m = DMat3::from_mat4(m).inverse().transpose();

@@ -3,6 +3,7 @@
 //! ([`gltf`]), chosen by the file extension.
 
 pub mod gltf;
+pub mod guard;
 pub mod json;
 
 use std::path::{Path, PathBuf};
@@ -10,13 +11,33 @@ use std::path::{Path, PathBuf};
 use crate::scene::Scene;
 use crate::SceneError;
 
-/// Settings from the command line that override the file.
-#[derive(Clone, Debug, Default)]
+/// Settings from the command line that override the file, and the limits of
+/// what a scene may make the loader do ([`guard`]).
+#[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// Image width in pixels (overrides the scene's).
     pub width: Option<u32>,
     /// Image height in pixels (overrides the scene's).
     pub height: Option<u32>,
+    /// Refuse every referenced file outside the scene file's folder (`--restrict-paths`).
+    pub restrict_paths: bool,
+    /// Most bytes that the files read and the loaded geometry may take
+    /// (`--max-scene-memory`), checked before any data is expanded.
+    pub max_scene_bytes: u64,
+    /// Most triangles in the scene: the device's limit when a renderer is known.
+    pub max_triangles: u64,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            width: None,
+            height: None,
+            restrict_paths: false,
+            max_scene_bytes: guard::DEFAULT_MAX_SCENE_BYTES,
+            max_triangles: guard::DEFAULT_MAX_TRIANGLES,
+        }
+    }
 }
 
 /// A loaded scene with what the loader wants the user to know.

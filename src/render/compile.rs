@@ -244,7 +244,27 @@ impl Assembled {
     }
 
     /// Compiles entry point `entry` (the render kernel or the ray queries).
+    /// naga reports bad WGSL as errors, but can panic on some inputs; such a
+    /// panic becomes a [`CompileError`] too, so no shader file crashes the
+    /// renderer or a `watch` loop.
     pub fn compile_entry(
+        &self,
+        features: &Features,
+        kernel: &KernelOptions,
+        entry: &str,
+    ) -> Result<Vec<u32>, CompileError> {
+        crate::panics::catch(|| self.compile_unguarded(features, kernel, entry)).unwrap_or_else(
+            |panic| {
+                Err(CompileError {
+                    location: "shaders".into(),
+                    message: format!("internal error in naga ({panic}); please report this shader"),
+                })
+            },
+        )
+    }
+
+    /// [`Assembled::compile_entry`] without the panic guard.
+    fn compile_unguarded(
         &self,
         features: &Features,
         kernel: &KernelOptions,

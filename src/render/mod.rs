@@ -345,6 +345,20 @@ impl Renderer {
         self.context.info()
     }
 
+    /// The most triangles a scene may have on this device: its triangle
+    /// records must fit a texel image of `maxImageDimension2D` rows, and its
+    /// BVH primitive references one storage buffer. Loaders check this
+    /// before expanding a file (`LoadOptions::max_triangles`).
+    pub fn max_triangles(&self) -> u64 {
+        let limits = self.context.limits();
+        let texels_per_triangle =
+            (std::mem::size_of::<layout::Triangle>() / crate::vulkan::TEXEL_BYTES) as u64;
+        let in_image = limits.max_image_dimension_2d as u64 * crate::vulkan::TEXEL_ROW as u64
+            / texels_per_triangle;
+        let in_buffer = limits.max_storage_buffer_range / std::mem::size_of::<u32>() as u64;
+        in_image.min(in_buffer)
+    }
+
     /// The kernel variant in use.
     pub fn kernel(&self) -> KernelOptions {
         self.kernel
