@@ -311,7 +311,11 @@ pub fn part(args: &Args) -> anyhow::Result<PeersPart> {
     let Some(python) = python else {
         return Ok(out);
     };
-    out.python = python.display().to_string();
+    out.python = python
+        .strip_prefix(&root)
+        .unwrap_or(&python)
+        .display()
+        .to_string();
     let k = KernelOptions::default();
     let up = crate::upload(&mut r, &bunny, k)?;
     let (w, h) = up.size();
@@ -655,6 +659,23 @@ pub fn section(o: &mut String, r: &Results) {
     );
 }
 
+/// A caution for an absolute figure of `part` when other processes took
+/// more than half a core during it (ratios of interleaved pairs are robust to
+/// that; absolute times are not).
+fn load_caution(r: &Results, part: &str) -> String {
+    let worst = r
+        .parts
+        .iter()
+        .filter(|p| p.part == part)
+        .map(|p| p.other_cores)
+        .fold(f64::NAN, f64::min);
+    if worst > 0.5 {
+        format!(" (measured while other processes used {worst:.1} cores: an absolute time, slowed by them)")
+    } else {
+        String::new()
+    }
+}
+
 /// Section 8: where penumbra stands on this machine — each target's verdict
 /// from this run, and what differs from the AVX-512 machine.
 pub fn standing_section(o: &mut String, r: &Results) {
@@ -726,24 +747,26 @@ pub fn standing_section(o: &mut String, r: &Results) {
         let b = m.build_ms() / m.render_ms.median;
         let _ = writeln!(
             o,
-            "| {}-triangle BVH build / one 1024×1024 frame of it | {:.2}× ({:.0} vs {:.1} ms) | well under (below half): {} | {:.2}× |",
+            "| {}-triangle BVH build / one 1024×1024 frame of it | {:.2}× ({:.0} vs {:.1} ms) | well under (below half): {}{} | {:.2}× |",
             int(m.triangles as u64),
             b,
             m.build_ms(),
             m.render_ms.median,
             if b < 0.5 { "met" } else { "not met" },
+            load_caution(r, "scaling"),
             ZEN4.build_ratio
         );
     }
     let _ = writeln!(
         o,
-        "| Mrays/s, bunny | {:.1} | ≥ 10: {} | {:.1} |",
+        "| Mrays/s, bunny | {:.1} | ≥ 10: {}{} | {:.1} |",
         bunny.mrays_median,
         if bunny.mrays_median >= 10.0 {
             "met"
         } else {
             "not met"
         },
+        load_caution(r, "throughput"),
         (bunny.primary_rays + bunny.shadow_rays) as f64 / ZEN4.bunny_ms / 1e3
     );
     let w512 = knob("LP_NATIVE_VECTOR_WIDTH", "512");
@@ -818,15 +841,17 @@ fn machines_paragraph(r: &Results) -> String {
     }
     let _ = write!(
         s,
-        "penumbra's bunny frame takes {bunny:.1} ms here against {:.1} ms there ({:.2}×). ",
+        "penumbra's bunny frame takes {bunny:.1} ms here{} against {:.1} ms there ({:.2}×). ",
+        load_caution(r, "throughput"),
         ZEN4.bunny_ms,
         bunny / ZEN4.bunny_ms
     );
     if let Some(m) = r.peers.valid("mitsuba-llvm") {
         let _ = write!(
             s,
-            "Mitsuba's LLVM variant takes {:.1} ms here against {:.1} ms there ({:.2}×), so penumbra's ratio to it is {:.2}× here against {:.2}× there: {}",
+            "Mitsuba's LLVM variant takes {:.1} ms here{} against {:.1} ms there ({:.2}×), so penumbra's ratio to it is {:.2}× here against {:.2}× there: {}",
             m.frame_ms.median,
+            load_caution(r, "peers"),
             ZEN4.mitsuba_llvm_ms,
             m.frame_ms.median / ZEN4.mitsuba_llvm_ms,
             m.ratio.median,
