@@ -289,6 +289,10 @@ pub struct PartInfo {
     /// CPU time of everything else on the machine over the same wall time
     /// (cores): other processes competing for the 2 cores.
     pub other_cores: f64,
+    /// CPU time of niced processes (nice > 0), which yield to the benchmark,
+    /// over the same wall time (cores); not in `other_cores`.
+    #[serde(default)]
+    pub niced_cores: f64,
 }
 
 /// One lavapipe setting, measured in several child processes interleaved
@@ -885,16 +889,28 @@ fn wait_quiet() -> f64 {
     t0.elapsed().as_secs_f64()
 }
 
-/// Busy CPU time of the whole machine in clock ticks (1/100 s).
+/// Busy CPU time of the whole machine in clock ticks (1/100 s), without
+/// that of niced processes ([`machine_nice_ticks`]).
 fn machine_busy_ticks() -> u64 {
+    stat_ticks(|i| i != 1 && i != 3 && i != 4)
+}
+
+/// CPU time of niced processes (nice > 0) in clock ticks: they yield the
+/// cores to the benchmark, so they are counted apart from the others.
+fn machine_nice_ticks() -> u64 {
+    stat_ticks(|i| i == 1)
+}
+
+/// The sum of the fields of /proc/stat's `cpu` line that `keep` keeps, by
+/// index: user nice system idle iowait irq softirq steal.
+fn stat_ticks(keep: impl Fn(usize) -> bool) -> u64 {
     let stat = std::fs::read_to_string("/proc/stat").unwrap_or_default();
     let line = stat.lines().next().unwrap_or("");
-    // user nice system idle iowait irq softirq steal: all but idle, iowait.
     line.split_whitespace()
         .skip(1)
         .take(8)
         .enumerate()
-        .filter(|(i, _)| *i != 3 && *i != 4)
+        .filter(|(i, _)| keep(*i))
         .map(|(_, x)| x.parse::<u64>().unwrap_or(0))
         .sum()
 }
@@ -946,6 +962,7 @@ fn child_with<T: for<'de> Deserialize<'de>>(
     }
     let t0 = Instant::now();
     let busy0 = machine_busy_ticks();
+    let nice0 = machine_nice_ticks();
     eprintln!("bench: {part} {env:?}");
     let status = cmd
         .status()
@@ -955,6 +972,7 @@ fn child_with<T: for<'de> Deserialize<'de>>(
     }
     let wall = t0.elapsed().as_secs_f64();
     let busy = machine_busy_ticks().saturating_sub(busy0) as f64 / 100.0;
+    let nice = machine_nice_ticks().saturating_sub(nice0) as f64 / 100.0;
     let own = std::fs::read_to_string(out.with_extension("ticks"))
         .ok()
         .and_then(|t| t.trim().parse::<u64>().ok())
@@ -969,6 +987,7 @@ fn child_with<T: for<'de> Deserialize<'de>>(
         wall_s: wall,
         own_cores: own / wall,
         other_cores: ((busy - own) / wall).max(0.0),
+        niced_cores: nice / wall,
     };
     eprintln!(
         "bench: {part} took {wall:.1} s (own {:.2} cores, others {:.2} cores)",

@@ -635,11 +635,11 @@ pub fn markdown(r: &Results) -> String {
     let _ = writeln!(o, "## Machine load during the run\n");
     let _ = writeln!(
         o,
-        "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. Each part waits (up to 30 s) for a quiet second before it starts, and section 1 is repeated (up to three times) while others used more than half a core, keeping the quietest run. For every measuring process: its own CPU use and everyone else's, averaged over its run (from /proc/stat), in cores. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
+        "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. Each part waits (up to 30 s) for a quiet second before it starts, and section 1 is repeated (up to three times) while others used more than half a core, keeping the quietest run. For every measuring process: its own CPU use (with its child processes: the peers) and everyone else's, averaged over its run (from /proc/stat), in cores; niced processes (nice > 0, which yield the cores to the benchmark) are counted apart and are not waited for. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
     );
     let _ = writeln!(
         o,
-        "| Part | Environment | Wall | Own cores | Other cores |\n|---|---|---|---|---|"
+        "| Part | Environment | Wall | Own cores | Other cores | Niced cores |\n|---|---|---|---|---|---|"
     );
     for p in &r.parts {
         let env = p
@@ -650,8 +650,8 @@ pub fn markdown(r: &Results) -> String {
             .join(" ");
         let _ = writeln!(
             o,
-            "| {} | {} | {:.1} s | {:.2} | {:.2} |",
-            p.part, env, p.wall_s, p.own_cores, p.other_cores
+            "| {} | {} | {:.1} s | {:.2} | {:.2} | {:.2} |",
+            p.part, env, p.wall_s, p.own_cores, p.other_cores, p.niced_cores
         );
     }
     o
