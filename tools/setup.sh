@@ -93,7 +93,8 @@ parse_devices() {
 installed_mesa() {
   if [ -n "$fake_mesa" ]; then [ "$fake_mesa" = none ] || echo "$fake_mesa"; return; fi
   if [ -n "$fake_devices" ]; then return; fi
-  dpkg-query -W -f='${db:Status-Abbrev} ${Version}\n' mesa-vulkan-drivers 2>/dev/null \
+  # (dpkg-query fails for a package it has never seen: not installed.)
+  { dpkg-query -W -f='${db:Status-Abbrev} ${Version}\n' mesa-vulkan-drivers 2>/dev/null || true; } \
     | awk '$1 ~ /^ii/ { print $2 }'
 }
 
@@ -177,17 +178,22 @@ if [ "$want_layers" = 1 ]; then
   "$tools_dir/mesa_tree.sh"
 fi
 
-if ! command -v cargo >/dev/null; then
-  echo "setup.sh: cargo not found. Install Rust (1.80 or newer) with rustup: https://rustup.rs" >&2
-  exit 1
-fi
-
 if [ "$action" != keep ]; then
-  dpkg-query -W -f='setup.sh: done: ${Package} ${Version}\n' mesa-vulkan-drivers 2>/dev/null || true
+  now=$(installed_mesa)
+  if [ "$now" = "$mesa" ]; then
+    echo "setup.sh: done: mesa-vulkan-drivers ${now:-not installed} (already the newest; nothing changed)"
+  else
+    echo "setup.sh: done: mesa-vulkan-drivers ${mesa:-not installed} -> ${now:-not installed}"
+  fi
   read_devices
   parse_devices <<<"$summary" | while IFS='|' read -r type name info; do
     echo "setup.sh: now: $type device: $name${info:+ ($info)}"
   done
+fi
+
+if ! command -v cargo >/dev/null; then
+  echo "setup.sh: cargo not found. Install Rust (1.80 or newer) with rustup: https://rustup.rs" >&2
+  exit 1
 fi
 
 # --bench: Mitsuba 3 and Embree for the benchmark's peer figures, in a venv under target/
