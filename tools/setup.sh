@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs what penumbra needs to render on a machine without a GPU: the Vulkan loader and
 # Mesa's CPU driver lavapipe, from the newest suite the distribution offers (on Debian 12 that
-# is bookworm-backports: Mesa 25 ran our ray-tracing kernel 1.75x faster than bookworm's
-# Mesa 22.3).
+# is bookworm-backports: Mesa 25 ran our ray-tracing kernel about 3x faster than bookworm's
+# Mesa 22.3 on one machine, docs/drivers.md).
 #
 #   tools/setup.sh              loader + lavapipe unless the loader reports a GPU
 #   tools/setup.sh --tests      also what the test suite needs: the Khronos validation
