@@ -166,6 +166,12 @@ fn persist(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     }
     let mut tmp = builder.tempfile_in(parent_dir(path)).map_err(io)?;
     tmp.write_all(bytes).map_err(io)?;
+    // A test aid for the last-resort panic report (src/panics.rs): a panic
+    // here, with the temporary file written but not renamed, must leave no
+    // output behind.
+    if std::env::var_os("PENUMBRA_TEST_INTERNAL_ERROR").is_some() {
+        panic!("PENUMBRA_TEST_INTERNAL_ERROR is set");
+    }
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())

@@ -774,3 +774,207 @@ fn no_vulkan_driver_devices() {
     );
     assert!(e.contains("apt-get install"), "{e}");
 }
+
+// ------------------------------------------------- untrusted files (fuzzing)
+
+/// The regression files of the fuzzing harness (tests/data/fuzz), each
+/// copied into its own folder beside the traps its URIs name: a FIFO
+/// `fifo.bin` and a file `../outside.bin` outside the scene's folder.
+struct Trapped {
+    _dir: TempDir,
+    scene: PathBuf,
+}
+
+fn trapped(name: &str) -> Trapped {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let folder = dir.path().join("scene");
+    std::fs::create_dir(&folder).unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz");
+    let scene = folder.join(name);
+    std::fs::copy(data.join(name), &scene).expect("copy regression file");
+    std::fs::write(dir.path().join("outside.bin"), [0u8; 64]).unwrap();
+    let fifo = std::ffi::CString::new(
+        folder
+            .join("fifo.bin")
+            .into_os_string()
+            .into_encoded_bytes(),
+    )
+    .unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) }, 0, "mkfifo");
+    Trapped { _dir: dir, scene }
+}
+
+fn render_args(scene: &Path, out_dir: &Path, extra: &[&str]) -> Vec<OsString> {
+    let mut args: Vec<OsString> = vec!["render".into(), scene.into(), "-o".into()];
+    args.push(out_dir.join("out.png").into());
+    args.extend(extra.iter().map(OsString::from));
+    args
+}
+
+#[test]
+fn fuzzing_regressions_fail_with_their_errors() {
+    // (file, field, message): each fails at once, without a panic, a hang on
+    // the FIFO or reading /dev/zero, or expanding the sparse accessor.
+    let cases = [
+        (
+            "camera_type_mismatch.gltf",
+            "cameras[0].orthographic",
+            "the camera's type is \"orthographic\" but it has no `orthographic` object",
+        ),
+        (
+            "sparse_amplification.gltf",
+            "meshes[0].primitives[0]",
+            "more than the scene memory budget of 4096.0 MiB",
+        ),
+        (
+            "buffer_dev_zero.gltf",
+            "buffers[0].uri",
+            "the buffer /dev/zero is not a regular file",
+        ),
+        (
+            "buffer_fifo.gltf",
+            "buffers[0].uri",
+            "fifo.bin is not a regular file",
+        ),
+    ];
+    for (name, field, message) in cases {
+        let t = trapped(name);
+        let out_dir = tempfile::tempdir().unwrap();
+        let out = penumbra(&render_args(&t.scene, out_dir.path(), &[]), &[]);
+        let scene = t.scene.display().to_string();
+        let field = format!(": {field}: ");
+        assert_fails(
+            &out,
+            out_dir.path(),
+            &[],
+            Shape::OneLine,
+            &[&scene, &field, message],
+        );
+    }
+}
+
+#[test]
+fn restrict_paths_refuses_files_outside_the_scene_folder() {
+    let t = trapped("buffer_outside.gltf");
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(
+        &render_args(&t.scene, out_dir.path(), &["--restrict-paths"]),
+        &[],
+    );
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            ": buffers[0].uri: ",
+            "outside.bin lies outside the scene's folder",
+            "(--restrict-paths)",
+        ],
+    );
+    // Without the flag the same file is read: it renders.
+    let out = penumbra(&render_args(&t.scene, out_dir.path(), &[]), &[]);
+    assert!(out.status.success(), "stderr:\n{}", text(&out.stderr));
+    assert!(out_dir.path().join("out.png").is_file());
+}
+
+#[test]
+fn restrict_paths_refuses_a_json_mesh_outside_the_scene_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("scene");
+    std::fs::create_dir(&folder).unwrap();
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.glb");
+    std::fs::copy(bunny, dir.path().join("bunny.glb")).unwrap();
+    let scene = folder.join("scene.json");
+    let json = mutated(|v| {
+        v["objects"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"type": "mesh", "file": "../bunny.glb"}))
+    });
+    std::fs::write(&scene, json).unwrap();
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(
+        &render_args(&scene, out_dir.path(), &["--restrict-paths"]),
+        &[],
+    );
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            ": objects[3].file: ",
+            "bunny.glb lies outside the scene's folder",
+        ],
+    );
+}
+
+#[test]
+fn max_scene_memory_bounds_the_geometry() {
+    // Twelve instances of the bunny (each about 0.4 MiB as loaded) exceed 1 MiB.
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.glb");
+    std::fs::copy(bunny, dir.path().join("bunny.glb")).unwrap();
+    let scene = dir.path().join("scene.json");
+    let json = mutated(|v| {
+        for _ in 0..12 {
+            let mesh = json!({"type": "mesh", "file": "bunny.glb"});
+            v["objects"].as_array_mut().unwrap().push(mesh);
+        }
+    });
+    std::fs::write(&scene, json).unwrap();
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(
+        &render_args(&scene, out_dir.path(), &["--max-scene-memory", "1"]),
+        &[],
+    );
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            "bunny.glb: ",
+            "scene memory budget of 1.0 MiB (1048576 bytes, --max-scene-memory)",
+        ],
+    );
+    let out = penumbra(
+        &render_args(&scene, out_dir.path(), &["--max-scene-memory", "0"]),
+        &[],
+    );
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::Clap,
+        &["--max-scene-memory"],
+    );
+}
+
+#[test]
+fn an_internal_error_is_one_line_naming_the_file_and_leaves_no_output() {
+    let scene = scene_file("scene.json", mutated(|_| {}));
+    let out_dir = tempfile::tempdir().unwrap();
+    let args = render_args(&scene.path, out_dir.path(), &["--reference"]);
+    let out = penumbra(&args, &[("PENUMBRA_TEST_INTERNAL_ERROR", "1")]);
+    assert_eq!(
+        out.status.code(),
+        Some(70),
+        "stderr:\n{}",
+        text(&out.stderr)
+    );
+    let p = scene.path.display().to_string();
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            &p,
+            "internal error: PENUMBRA_TEST_INTERNAL_ERROR is set",
+            "a bug in penumbra",
+        ],
+    );
+}

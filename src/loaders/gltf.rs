@@ -433,7 +433,8 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
 }
 
 /// Each camera carries the projection object its `type` names: gltf-json
-/// 1.4.1's validation does not check this, and `Camera::projection` unwraps it.
+/// 1.4.1's validation misses a camera that has only the other one, and
+/// `Camera::projection` unwraps it.
 fn check_cameras(path: &Path, root: &gltf::json::Root) -> Result<()> {
     use gltf::json::camera::Type;
     for (i, c) in root.cameras.iter().enumerate() {
@@ -443,7 +444,9 @@ fn check_cameras(path: &Path, root: &gltf::json::Root) -> Result<()> {
             // An unknown type is reported by the crate's own validation.
             Checked::Invalid => continue,
         };
-        if !present {
+        // With neither object the crate's validation reports `cameras[i]` itself.
+        let other = c.perspective.is_some() || c.orthographic.is_some();
+        if !present && other {
             let message = format!("the camera's type is \"{name}\" but it has no `{name}` object");
             return Err(SceneError::new(
                 path,

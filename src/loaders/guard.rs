@@ -91,10 +91,11 @@ impl Guard {
         let limit = self.max_bytes.saturating_sub(self.bytes.get());
         if meta.len() > limit {
             return Err(Refused(format!(
-                "the {what} {} has {} bytes, more than the {} left of the scene memory budget (--max-scene-memory)",
+                "the {what} {} has {} bytes, more than the {limit} bytes left of the scene memory budget of {} ({} bytes, --max-scene-memory)",
                 path.display(),
                 meta.len(),
-                mib(limit)
+                mib(self.max_bytes),
+                self.max_bytes
             )));
         }
         let file = std::fs::File::open(path)
