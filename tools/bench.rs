@@ -332,6 +332,10 @@ pub struct Results {
     pub default_triangle_test: String,
     pub quick: bool,
     pub wall_s: f64,
+    /// The benchmark's scheduling priority (nice value; the children and the
+    /// peers inherit it): below 0 it ran ahead of other processes.
+    #[serde(default)]
+    pub nice: i64,
     pub parts: Vec<PartInfo>,
     pub throughput: ThroughputPart,
     pub knob_rounds: usize,
@@ -867,6 +871,16 @@ fn own_ticks() -> u64 {
     (11..15).map(|i| f.get(i).copied().unwrap_or(0)).sum()
 }
 
+/// This process's nice value (the 19th field of /proc/self/stat).
+fn own_nice() -> i64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = stat.rsplit_once(')').map_or("", |r| r.1);
+    rest.split_whitespace()
+        .nth(16)
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(0)
+}
+
 /// Waits (at most 30 s per part and 120 s per run) until other processes
 /// use less than a third of a core over one second, so that measurements
 /// start on a quiet machine where possible; returns the seconds waited. The
@@ -1047,6 +1061,7 @@ fn main() -> anyhow::Result<()> {
     results.seminar = child(&args, p, "seminar", &[])?;
     results.cpu = child(&args, p, "cpu", &[])?;
     results.cpu_info = machine::CpuInfo::read();
+    results.nice = own_nice();
     results.peers = if args.no_peers {
         peers::PeersPart {
             not_measured: Some("skipped by `--no-peers`".into()),
