@@ -25,7 +25,7 @@
 //! f_seminar(l, v) = k_d + k_s·max(0, r·v)^n_s / cos θ_i
 //! ```
 //!
-//! That is the reasoning of the issue, and it holds: the specular term is
+//! The specular term is
 //! multiplied by the light but not by `cos θ_i`, so as a BRDF it carries a
 //! `1/cos θ_i` — which is what breaks reciprocity (`f(ω_i, ω_o)/f(ω_o, ω_i) =
 //! cos θ_o / cos θ_i`) and makes the reflected energy diverge at grazing

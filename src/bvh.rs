@@ -30,9 +30,7 @@
 //! partition tests the split plane with one compare. Nodes below the
 //! parallel levels (they fit in the cache) partition through a scratch
 //! buffer, each primitive going to its side by a conditional move rather
-//! than Hoare's branches, which mispredict on unordered nodes: 0.96× the
-//! million-triangle build (`build_time` at 74db587 and c07d727, alternately:
-//! 87.6 against 84.6 ms, medians of three runs).
+//! than Hoare's branches, which mispredict on unordered nodes.
 //!
 //! Nodes of more than `SAMPLE_ABOVE` (2k) primitives, all but the last
 //! few levels, pick their split from the bins of a stratified sample of at
@@ -41,23 +39,19 @@
 //! of two. A sample misses the rare huge primitive (a ground quad beside a
 //! dense mesh) that decides the best split, so when the sample's bounds
 //! cover less than `SAMPLE_COVER` (95 %) of the node's area the node bins
-//! everything. Against binning everything, the SAH cost
-//! ([`Bvh::sah_cost`]) of the bunny's tree stays 4.8069, and that of its
-//! 235k-triangle subdivision and of the 1M-triangle bumpy sphere rises by
-//! 0.05 %; sampling down to 2k rather than 32k primitives made the
-//! million-triangle build (with the parallel flattening below) 0.86× as
-//! long (`cargo run --release --example build_time` at 4989368 and 129621b,
-//! alternately: 121.4 against 103.9 ms, medians of five runs). Sampling, chunking and every reduction are fixed by the input
-//! alone, so the tree does not depend on rayon's scheduling.
+//! everything. The sample costs the trees a fraction of a per cent of SAH
+//! cost ([`Bvh::sah_cost`]; `cargo run --release --example build_time`
+//! prints it) and saves a pass over every large node. Sampling, chunking
+//! and every reduction are fixed by the input alone, so the tree does not
+//! depend on rayon's scheduling. docs/history.md has the measurements
+//! behind these choices.
 //!
 //! The flattened layout is depth-first: a node's left child follows it
 //! directly, so an interior node stores only its right child's index.
 //! Subtrees know their sizes, so they are flattened in parallel, each into
 //! its own slice of the array. The GPU's encoder needs no flat copy: it
 //! reads the builder's tree as it is ([`Chunked`]), which saves the copy's
-//! 32 bytes a node of memory and 0.95× the million-triangle build
-//! (`build_time`, alternately at ea30096 and the commit after: 87.5 against
-//! 83.5 ms, medians of six runs of 9 builds).
+//! 32 bytes a node of memory and the time to make it.
 
 use glam::{DVec3, UVec3, Vec3A, Vec4};
 use rayon::prelude::*;

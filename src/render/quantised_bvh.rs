@@ -10,14 +10,13 @@
 //! (`f32` box, child index, count) a step loaded 16 words: the node's index
 //! and count, then each child's two box corners. A record here needs 9: the
 //! frame and its scales, the twelve steps, the two child references;
-//! decoding them is cheap vector arithmetic. The bunny frame took 0.94× the
-//! CPU time this way (docs/bench.md §6). The kernel now reads each record
-//! as texels of a read-only storage image (`vulkan::TexelImage`,
-//! straight-line code on lavapipe: docs/bench.md §6), two of them: each
-//! axis's frame origin is stored as its step count and the step's exponent
-//! in one word, so a record takes 32 bytes per interior node (0.5× the
-//! memory of 32-byte nodes) and a traversal step fetches two texels, not
-//! three (0.98× the bunny's frame).
+//! decoding them is cheap vector arithmetic. The kernel reads each record
+//! as texels of a read-only storage image (`vulkan::TexelImage`), whose
+//! loads are straight-line code on lavapipe, two of them: each axis's frame
+//! origin is stored as its step count and the step's exponent in one word,
+//! so a record takes 32 bytes per interior node (half the memory of two
+//! 32-byte nodes) and a traversal step fetches two texels, not three.
+//! docs/bench.md §6 and docs/history.md have the measurements.
 //!
 //! Conservative by construction: each axis of a record is quantised on a
 //! grid `k·2^e` coarse enough that every grid point within reach is an
@@ -31,11 +30,8 @@
 //! (exact for coordinates below 2⁹⁰, where every step of it is a normal
 //! `f32`; an `f64` path with the same checks takes larger ones), and walks
 //! the tree in parallel, each subtree writing its own run of records
-//! (straight from the builder's chunks). That
-//! took the million-triangle scene's references and records from 20 to
-//! 9.5 ms, and its whole build from 105 to 94 ms (`cargo run --release
-//! --example build_time`, alternate runs; its phase line is timed with the
-//! old encoder of 3e417a5 in the same harness).
+//! (straight from the builder's chunks), so encoding stays a small part of
+//! the build (`cargo run --release --example build_time` prints the phases).
 
 use glam::Vec3A;
 

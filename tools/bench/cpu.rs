@@ -1,6 +1,5 @@
-//! A plain multi-threaded Rust CPU implementation of the kernel's algorithm,
-//! the baseline the issue's target names ("no slower than a plain
-//! multi-threaded Rust CPU implementation of the same algorithm").
+//! A plain multi-threaded Rust CPU implementation of the kernel's algorithm:
+//! the baseline the GPU kernel on lavapipe must not be slower than.
 //!
 //! It is a straightforward port of `shaders/*.wgsl` for the features the
 //! bunny scene uses — triangles (with or without vertex normals), infinite
@@ -11,10 +10,10 @@
 //! choices differ from the kernel's because the kernel's would make this
 //! port slower, and the target is to beat the port at its best: it traverses
 //! the tree's exact `f32` node boxes, not the kernel's quantised records
-//! (decoding them made the port 1.5× slower: 173.4 against 114 ms a bunny
-//! frame, commits f2db9cc and b034ab0), and shadow rays visit the left child first, not the
-//! nearer one (1.2× slower: 114 against 93 ms, commits b034ab0 and 2449016,
-//! bench's `cpu` part) — while both made lavapipe faster (docs/bench.md §6).
+//! (decoding them made the port slower), and shadow rays visit the left
+//! child first, not the nearer one (the nearer-first order made it slower) —
+//! while both made lavapipe faster (docs/bench.md §6; the port's figures are
+//! in docs/history.md).
 //! Neither changes a result: same hits, same shadow-ray outcomes. The same primary
 //! rays through the pixel centres, the same nearest-first BVH traversal with
 //! the same widened slab test, the seminar's u,v-first Möller–Trumbore, the
