@@ -64,6 +64,9 @@ struct PushConstants {
 }
 
 const FLAG_WARM_UP: u32 = 1u;
+// This pass overwrites the image even if its pass_index is not 0: the first
+// pass of a sample split (`render --passes A..B`) that starts at A > 0.
+const FLAG_FRESH: u32 = 2u;
 
 @group(0) @binding(0) var<uniform> globals: Globals;
 // Linear RGB; alpha is 1 where a primary ray hit something, else 0.
@@ -104,7 +107,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             write_aov(pixel, hit);
         }
         var value = vec4<f32>(colour, alpha);
-        if push.pass_index > 0u {
+        if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {
             value += image[pixel];
         }
         image[pixel] = value;

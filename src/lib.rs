@@ -14,7 +14,8 @@
 //! * [`vulkan`], the only module that talks to Vulkan (`ash`);
 //! * [`reference`](mod@reference) renders the same image on the CPU in `f64`
 //!   (the ground truth for error figures);
-//! * [`output`] writes PNG (sRGB) and OpenEXR (linear) files atomically.
+//! * [`output`] writes PNG (sRGB) and OpenEXR (linear) files atomically;
+//! * [`farm`] splits a render into parts for a batch engine and merges them.
 //!
 //! ```no_run
 //! use penumbra::{loaders, render::{Renderer, RendererOptions}};
@@ -28,6 +29,7 @@
 pub mod brdf;
 pub mod bvh;
 pub mod error;
+pub mod farm;
 pub mod loaders;
 pub mod metrics;
 pub mod output;

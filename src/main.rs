@@ -39,6 +39,36 @@ enum Command {
     /// Compare two renders (.png or .exr of the same size): print error metrics
     /// (`name: value`, one a line) and optionally write a FLIP false-colour map.
     Diff(DiffArgs),
+    /// Merge the part files of a split render (`render --tile`/`--passes`)
+    /// into one image, after checking that they make up exactly one render.
+    Merge(MergeArgs),
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The part files (.exr), in any order.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// The merged image (.png or .exr), written atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+fn merge(args: MergeArgs) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let plan = penumbra::farm::merge::plan(&args.parts)?;
+    penumbra::farm::merge::write(&plan, &args.output)?;
+    println!(
+        "merged {} parts ({} tiles, {} passes) into {} ({}x{}) in {}",
+        args.parts.len(),
+        plan.tiles.len(),
+        plan.spp,
+        args.output.display(),
+        plan.width,
+        plan.height,
+        ms(t0.elapsed())
+    );
+    Ok(())
 }
 
 #[derive(clap::Args)]
@@ -200,6 +230,14 @@ struct RenderArgs {
     /// takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
+    /// Render only tile I of N (bands of rows) into an OpenEXR part file
+    /// for `penumbra merge`.
+    #[arg(long, value_name = "I/N")]
+    tile: Option<penumbra::farm::split::Tile>,
+    /// Render only passes A..B (of --spp) into an OpenEXR part file holding
+    /// their sum, for `penumbra merge`.
+    #[arg(long, value_name = "A..B")]
+    passes: Option<penumbra::farm::split::Passes>,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -237,8 +275,35 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         reference,
         aov,
         vector_width,
+        tile,
+        passes,
         limits,
     } = args;
+    let split = tile.is_some() || passes.is_some();
+    if split {
+        let refuse =
+            |what: &str| anyhow::anyhow!("--tile/--passes: cannot be combined with {what}");
+        if reference {
+            return Err(refuse("--reference"));
+        }
+        if aov.is_some() {
+            return Err(refuse("--aov"));
+        }
+        if time_budget.is_some() {
+            return Err(refuse("--time-budget (a part must render all its passes)"));
+        }
+        if output::Format::from_path(&out)? != output::Format::Exr {
+            anyhow::bail!(
+                "{}: a part of a split render is an OpenEXR file (-o NAME.exr)",
+                out.display()
+            );
+        }
+        if let Some(p) = passes {
+            if p.end > spp {
+                anyhow::bail!("--passes: {p} is not within the render's --spp {spp} passes");
+            }
+        }
+    }
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
     let vector_width = (!reference).then(|| {
         vector_width::apply(
@@ -259,6 +324,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         );
     }
     let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
+    let shader_source = shaders.clone();
     let kernel = KernelOptions {
         accel,
         triangle_test,
@@ -305,6 +371,59 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed,
         time_budget,
     };
+    if split {
+        let settings = penumbra::farm::identity::RenderSettings {
+            width: scene_data.camera.width,
+            height: scene_data.camera.height,
+            spp,
+            seed,
+            area_samples,
+            kernel,
+        };
+        let render = penumbra::farm::identity::render_id(&loaded.files, &shader_source, &settings)?;
+        let tile = tile.unwrap_or(penumbra::farm::split::Tile::WHOLE);
+        let passes = passes.unwrap_or(penumbra::farm::split::Passes { start: 0, end: spp });
+        let rows = tile
+            .rows(settings.height)
+            .map_err(|e| anyhow::anyhow!("--tile: {e}"))?;
+        let info = penumbra::farm::part::PartInfo {
+            render,
+            scene: scene
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            tile,
+            passes,
+            spp,
+            width: settings.width,
+            height: settings.height,
+            rows: rows.clone(),
+        };
+        let uploaded = renderer.upload(&scene_data)?;
+        let part = penumbra::render::PartRange {
+            rows,
+            passes: passes.start..passes.end,
+        };
+        let frame = renderer.render_part(&uploaded, &part, &sampling, &mut |_| {})?;
+        let t1 = Instant::now();
+        penumbra::farm::part::write(&out, &info, &frame.image)?;
+        let t = &frame.stats.timings;
+        println!(
+            "part {} of {}: tile {tile}, rows {}..{}, passes {passes} of {spp} | load {}, shader compile {}, pipeline creation {}, driver compile {}, GPU render {}, readback {}, write {}",
+            out.display(),
+            scene.display(),
+            part.rows.start,
+            part.rows.end,
+            ms(load),
+            ms(t.shader_compile),
+            ms(t.pipeline_creation),
+            ms(t.driver_compile),
+            ms(t.render),
+            ms(t.readback),
+            ms(t1.elapsed())
+        );
+        return Ok(());
+    }
     let (frame, aovs) = render_with_progress(renderer, &scene_data, &sampling, aov.is_some())
         .map_err(|e| match e {
             // Device limits name a scene field: say which file.
@@ -497,6 +616,7 @@ fn main() -> ExitCode {
         Command::Render(a) => penumbra::panics::set_subject(a.scene.clone()),
         Command::Watch(a) => penumbra::panics::set_subject(a.scene.clone()),
         Command::Diff(a) => penumbra::panics::set_subject(a.b.clone()),
+        Command::Merge(a) => penumbra::panics::set_subject(a.output.clone()),
         Command::Devices => {}
     }
     let run = std::panic::catch_unwind(|| match cli.command {
@@ -504,6 +624,7 @@ fn main() -> ExitCode {
         Command::Devices => devices(),
         Command::Watch(args) => watch(args),
         Command::Diff(args) => diff(args),
+        Command::Merge(args) => merge(args),
     });
     match run {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -80,14 +80,18 @@ pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageErro
     let cursor = &mut std::io::Cursor::new(&mut bytes);
     match format {
         Format::Png => {
-            let rgb: Vec<u8> = image
-                .pixels
-                .iter()
-                .flat_map(|p| [srgb8(p[0]), srgb8(p[1]), srgb8(p[2])])
-                .collect();
-            image::RgbImage::from_raw(image.width, image.height, rgb)
-                .ok_or_else(size_mismatch)?
-                .write_to(cursor, image::ImageFormat::Png)?;
+            if image.pixels.len() != image.width as usize * image.height as usize {
+                return Err(size_mismatch());
+            }
+            let w = image.width as usize;
+            encode_png_rows(cursor, image.width, image.height, |y, row| {
+                let src = &image.pixels[y as usize * w..(y as usize + 1) * w];
+                for (out, p) in row.chunks_exact_mut(3).zip(src) {
+                    out.copy_from_slice(&[srgb8(p[0]), srgb8(p[1]), srgb8(p[2])]);
+                }
+                Ok(())
+            })
+            .map_err(|e| image::ImageError::IoError(std::io::Error::other(e.to_string())))?;
         }
         Format::Exr => {
             let rgb: Vec<f32> = image
@@ -101,6 +105,34 @@ pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageErro
         }
     }
     Ok(bytes)
+}
+
+/// Writes an 8-bit sRGB PNG row by row: `row(y, buf)` fills row `y` (`3 *
+/// width` bytes, RGB). Holding one row at a time is what lets `penumbra
+/// merge` write an image of any size in bounded memory; `render` writes its
+/// PNGs through the same encoder, so a merged image and an undivided render
+/// are the same bytes.
+pub fn encode_png_rows<W: Write>(
+    out: W,
+    width: u32,
+    height: u32,
+    mut row: impl FnMut(u32, &mut [u8]) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut encoder = png::Encoder::new(out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Balanced);
+    encoder.set_filter(png::Filter::Adaptive);
+    let mut writer = encoder.write_header()?;
+    let mut stream = writer.stream_writer()?;
+    let mut buf = vec![0u8; width as usize * 3];
+    for y in 0..height {
+        row(y, &mut buf)?;
+        stream.write_all(&buf)?;
+    }
+    stream.finish()?;
+    writer.finish()?;
+    Ok(())
 }
 
 fn size_mismatch() -> image::ImageError {
@@ -154,6 +186,24 @@ pub fn write_image(path: &Path, image: &Image) -> Result<(), OutputError> {
 /// place. The file gets the usual permissions (0666 less the umask), not the
 /// private 0600 of a temporary file.
 fn persist(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    persist_with(path, |f| f.write_all(bytes).map_err(anyhow::Error::from)).map_err(|e| {
+        match e.downcast::<OutputError>() {
+            Ok(e) => e,
+            Err(e) => OutputError::Io {
+                path: path.display().to_string(),
+                error: std::io::Error::other(format!("{e:#}")),
+            },
+        }
+    })
+}
+
+/// Atomic write of a file produced by `write` (which may stream it): a
+/// temporary file beside `path`, synced and renamed into place only when
+/// `write` succeeds; on any error nothing is left at `path` or beside it.
+pub fn persist_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
     let io = |error| OutputError::Io {
         path: path.display().to_string(),
         error,
@@ -164,8 +214,12 @@ fn persist(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut tmp = builder.tempfile_in(parent_dir(path)).map_err(io)?;
-    tmp.write_all(bytes).map_err(io)?;
+    let tmp = builder.tempfile_in(parent_dir(path)).map_err(io)?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file());
+        write(&mut w)?;
+        w.flush().map_err(io)?;
+    }
     // A test aid for the last-resort panic report (src/panics.rs): a panic
     // here, with the temporary file written but not renamed, must leave no
     // output behind.

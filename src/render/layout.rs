@@ -64,6 +64,9 @@ pub struct PushConstants {
 
 /// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
 pub const FLAG_WARM_UP: u32 = 1;
+/// `PushConstants::flags` bit: this pass overwrites the image whatever its
+/// `pass_index` (the first pass of a sample split that does not start at 0).
+pub const FLAG_FRESH: u32 = 2;
 
 /// Mirrors `Plane` in `shaders/primitives/plane.wgsl`.
 #[repr(C)]

@@ -21,7 +21,7 @@ use crate::vulkan::{
 pub use compile::{
     Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
 };
-use layout::{GpuScene, PushConstants, FLAG_WARM_UP};
+use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_WARM_UP};
 pub use trace::{HitKind, TraceHit, TraceRay};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
@@ -194,6 +194,19 @@ impl Default for Sampling {
             time_budget: None,
         }
     }
+}
+
+/// Which rows and which passes of a render to do: one part of a render split
+/// across processes or machines (`render --tile`, `--passes`; see
+/// [`crate::farm`]). Every pixel's samples depend only on the pixel, the
+/// pass index and the seed, so a part's pixels equal the same pixels of the
+/// undivided render.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartRange {
+    /// Rows `start..end` of the full image (row 0 at the top).
+    pub rows: std::ops::Range<u32>,
+    /// Pass indices `start..end` of the `Sampling::spp` passes.
+    pub passes: std::ops::Range<u32>,
 }
 
 /// Progress of a progressive render.
@@ -586,7 +599,42 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
-        let done = self.render_passes(scene, width, height, sampling, on_pass, false, None)?;
+        let done =
+            self.render_passes(scene, width, height, sampling, on_pass, false, None, None)?;
+        Ok(done.unwrap_or_else(|| unreachable!("not cancellable")).0)
+    }
+
+    /// Renders one part of a full-size render: the rows and passes of
+    /// `part` (pass indices out of `sampling.spp`, which also decides the
+    /// pixel jitter as in the undivided render). The image holds only those
+    /// rows, and each pixel is the *sum* of the part's passes, not the mean,
+    /// so that parts over different passes add up; `stats.passes` is their
+    /// count. A part over all passes, multiplied by `1 / spp` (when spp > 1),
+    /// is bit for bit the undivided render's rows.
+    pub fn render_part(
+        &mut self,
+        scene: &UploadedScene,
+        part: &PartRange,
+        sampling: &Sampling,
+        on_pass: &mut dyn FnMut(&PassInfo),
+    ) -> Result<Frame, RenderError> {
+        let (w, h) = (scene.width, scene.height);
+        if part.rows.start >= part.rows.end || part.rows.end > h {
+            return Err(RenderError::Scene {
+                field: "--tile".into(),
+                message: format!("rows {:?} are not within the image's {h} rows", part.rows),
+            });
+        }
+        if part.passes.start >= part.passes.end || part.passes.end > sampling.spp {
+            return Err(RenderError::Scene {
+                field: "--passes".into(),
+                message: format!(
+                    "passes {}..{} are not within 0..{}",
+                    part.passes.start, part.passes.end, sampling.spp
+                ),
+            });
+        }
+        let done = self.render_passes(scene, w, h, sampling, on_pass, false, None, Some(part))?;
         Ok(done.unwrap_or_else(|| unreachable!("not cancellable")).0)
     }
 
@@ -600,7 +648,7 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<(Frame, Aovs), RenderError> {
-        let done = self.render_passes(scene, width, height, sampling, on_pass, true, None)?;
+        let done = self.render_passes(scene, width, height, sampling, on_pass, true, None, None)?;
         let (frame, aovs) = done.unwrap_or_else(|| unreachable!("not cancellable"));
         Ok((frame, aovs.unwrap_or_default()))
     }
@@ -608,7 +656,8 @@ impl Renderer {
     /// The passes behind every render. With `cancel`, each pass is
     /// dispatched in bands of [`BAND_ROWS`] rows and `cancel` is asked before
     /// each band (`Ok(None)` once it says yes); without, a pass is one
-    /// dispatch (the fast path).
+    /// dispatch (the fast path). With `part`, only its rows and passes are
+    /// rendered and the image is their sum ([`Renderer::render_part`]).
     #[allow(clippy::too_many_arguments)]
     fn render_passes(
         &mut self,
@@ -619,6 +668,7 @@ impl Renderer {
         on_pass: &mut dyn FnMut(&PassInfo),
         with_aovs: bool,
         mut cancel: Option<&mut dyn FnMut() -> bool>,
+        part: Option<&PartRange>,
     ) -> Result<Option<(Frame, Option<Aovs>)>, RenderError> {
         if width == 0 || height == 0 || width > scene.width || height > scene.height {
             return Err(RenderError::Scene {
@@ -662,7 +712,14 @@ impl Renderer {
             refs[13] = b.into();
         }
         let pipeline = &self.pipelines[&(features, key_kernel)];
-        let groups = [width.div_ceil(TILE), height.div_ceil(TILE), 1];
+        let rows = part.map_or(0..height, |p| p.rows.clone());
+        let (first_pass, end_pass) =
+            part.map_or((0, sampling.spp), |p| (p.passes.start, p.passes.end));
+        let groups = [
+            width.div_ceil(TILE),
+            (rows.end - rows.start).div_ceil(TILE),
+            1,
+        ];
         let read_counters = || -> Result<[u32; 2], RenderError> {
             let bytes = ctx.read_buffer(scene.bound[8].buffer()?)?;
             Ok([0, 1].map(|i| {
@@ -675,11 +732,13 @@ impl Renderer {
         let mut render = Duration::ZERO;
         let start = Instant::now();
         let mut passes = 0;
-        while passes < sampling.spp {
+        while first_pass + passes < end_pass {
             let push = PushConstants {
+                origin: [0, rows.start],
                 size: [width, height],
-                pass_index: passes,
+                pass_index: first_pass + passes,
                 seed: sampling.seed,
+                flags: if passes == 0 { FLAG_FRESH } else { 0 },
                 ..Zeroable::zeroed()
             };
             match cancel.as_mut() {
@@ -709,7 +768,7 @@ impl Renderer {
             passes += 1;
             on_pass(&PassInfo {
                 done: passes,
-                total: sampling.spp,
+                total: end_pass - first_pass,
                 rays: primary_rays + shadow_rays,
                 elapsed: start.elapsed(),
             });
@@ -721,8 +780,18 @@ impl Renderer {
         let t1 = Instant::now();
         let image_bytes = ctx.read_buffer(scene.bound[7].buffer()?)?;
         let n = width as usize * height as usize;
-        let mut pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]);
-        if passes > 1 {
+        let mut pixels: Vec<[f32; 4]> = match part {
+            None => bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]),
+            Some(_) => {
+                let row_bytes = width as usize * 16;
+                let (a, b) = (
+                    rows.start as usize * row_bytes,
+                    rows.end as usize * row_bytes,
+                );
+                bytemuck::pod_collect_to_vec(&image_bytes[a..b])
+            }
+        };
+        if passes > 1 && part.is_none() {
             let inv = 1.0 / passes as f32;
             for p in &mut pixels {
                 *p = p.map(|c| c * inv);
@@ -739,7 +808,7 @@ impl Renderer {
             Frame {
                 image: Image {
                     width,
-                    height,
+                    height: rows.end - rows.start,
                     pixels,
                 },
                 stats: RenderStats {
@@ -784,6 +853,7 @@ impl Renderer {
             &mut |_| {},
             false,
             Some(cancel),
+            None,
         )?;
         Ok(done.map(|(frame, _)| frame))
     }

@@ -1,0 +1,1 @@
+//! Batches: placeholder, filled in below.
