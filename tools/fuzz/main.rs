@@ -209,15 +209,23 @@ fn worker(args: &Args, id: usize) -> ExitCode {
     let current = ws.dir.join("current");
     let stuck = watchdog(current.clone());
     let mut in_cases = Duration::ZERO;
+    let mut last_target = None;
     for n in 0..args.cases {
         if deadline.is_some_and(|d| Instant::now() > d) {
             break;
         }
         let seed = pick_seed(&seeds, &mut rng).clone();
         let data = make_case(&seed, &json_donors, &byte_donors, &mut rng);
-        // Written first, so that the supervisor can save it if this process dies.
-        let _ = std::fs::write(&current, format!("{}\n", seed.target.ext()));
-        let _ = std::fs::write(ws.dir.join(format!("last.{}", seed.target.ext())), &data);
+        // Written first, so that the supervisor can save the case if this
+        // process dies: the target, and for WGSL the text (a scene case is
+        // the case file itself).
+        if last_target != Some(seed.target) {
+            let _ = std::fs::write(&current, format!("{}\n", seed.target.ext()));
+            last_target = Some(seed.target);
+        }
+        if seed.target == Target::Wgsl {
+            let _ = std::fs::write(ws.case_path(Target::Wgsl), &data);
+        }
         stuck.arm();
         let restrict = rng.one_in(4);
         let file_name = Path::new(&seed.name)
@@ -549,7 +557,7 @@ fn run_worker(exe: &Path, args: &Args, id: usize, cases: u64, t0: Instant) -> Wo
         if let Some(dir) = dir {
             let ext = std::fs::read_to_string(dir.join("current")).unwrap_or_default();
             if let Some(target) = Target::from_ext(ext.trim()) {
-                let data = std::fs::read(dir.join(format!("last.{}", target.ext())));
+                let data = std::fs::read(dir.join(format!("case.{}", target.ext())));
                 saved = save(&args.out, target, &data.unwrap_or_default())
                     .display()
                     .to_string();

@@ -122,25 +122,35 @@ fn key_values(key: &str, context: &str) -> Option<Vec<Value>> {
     })
 }
 
-/// Every value in the tree, as a path of keys and indices.
-fn paths(v: &Value, prefix: &mut Vec<Step>, out: &mut Vec<Vec<Step>>) {
-    out.push(prefix.clone());
-    match v {
-        Value::Object(m) => {
-            for (k, child) in m {
-                prefix.push(Step::Key(k.clone()));
-                paths(child, prefix, out);
-                prefix.pop();
-            }
+/// A random value of the tree, as a path of keys and indices: from the
+/// root, stop at a container with probability 1/(children + 1), else go
+/// into a random child. Every value can be reached, and no list of all
+/// paths is built (that dominated the time of a case).
+fn random_path(v: &Value, rng: &mut Rng) -> Vec<Step> {
+    let mut path = Vec::new();
+    let mut at = v;
+    loop {
+        let n = match at {
+            Value::Object(m) => m.len(),
+            Value::Array(a) => a.len(),
+            _ => 0,
+        };
+        if n == 0 || rng.one_in(n + 1) {
+            return path;
         }
-        Value::Array(a) => {
-            for (i, child) in a.iter().enumerate() {
-                prefix.push(Step::Index(i));
-                paths(child, prefix, out);
-                prefix.pop();
+        let i = rng.below(n);
+        at = match at {
+            Value::Object(m) => {
+                let (k, child) = m.iter().nth(i).expect("i < len");
+                path.push(Step::Key(k.clone()));
+                child
             }
-        }
-        _ => {}
+            Value::Array(a) => {
+                path.push(Step::Index(i));
+                &a[i]
+            }
+            _ => return path,
+        };
     }
 }
 
@@ -149,6 +159,17 @@ fn paths(v: &Value, prefix: &mut Vec<Step>, out: &mut Vec<Vec<Step>>) {
 enum Step {
     Key(String),
     Index(usize),
+}
+
+fn get<'v>(v: &'v Value, path: &[Step]) -> Option<&'v Value> {
+    let mut at = v;
+    for s in path {
+        at = match s {
+            Step::Key(k) => at.as_object()?.get(k)?,
+            Step::Index(i) => at.as_array()?.get(*i)?,
+        };
+    }
+    Some(at)
 }
 
 fn get_mut<'v>(v: &'v mut Value, path: &[Step]) -> Option<&'v mut Value> {
@@ -236,9 +257,7 @@ fn snippet(rng: &mut Rng) -> (String, Value) {
 /// Applies one to four structure-aware mutations to a JSON tree.
 pub fn mutate_json(v: &mut Value, donors: &[Value], rng: &mut Rng) {
     for _ in 0..1 + rng.below(4) {
-        let mut all = Vec::new();
-        paths(v, &mut Vec::new(), &mut all);
-        let path = rng.pick(&all).clone();
+        let path = random_path(v, rng);
         let key = last_key(&path).map(str::to_string);
         let context = match path.first() {
             Some(Step::Key(k)) => k.clone(),
@@ -300,12 +319,9 @@ pub fn mutate_json(v: &mut Value, donors: &[Value], rng: &mut Rng) {
             8 => {
                 if !donors.is_empty() {
                     let donor = rng.pick(donors);
-                    let mut dp = Vec::new();
-                    paths(donor, &mut Vec::new(), &mut dp);
-                    let mut d = donor.clone();
-                    let at: &Vec<Step> = rng.pick(&dp);
-                    if let Some(sub) = get_mut(&mut d, at) {
-                        *target = sub.take();
+                    let at = random_path(donor, rng);
+                    if let Some(sub) = get(donor, &at) {
+                        *target = sub.clone();
                     }
                 }
             }
