@@ -173,10 +173,12 @@ impl LimitArgs {
 #[derive(clap::Args)]
 struct RenderArgs {
     /// The scene file.
-    scene: PathBuf,
-    /// Output image; the extension picks the format (.png or .exr).
-    #[arg(short, long, default_value = "out.png")]
-    output: PathBuf,
+    #[arg(required_unless_present = "batch")]
+    scene: Option<PathBuf>,
+    /// Output image; the extension picks the format (.png or .exr); default
+    /// out.png. With --batch, the folder the images go to.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
     /// Image width in pixels (overrides the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: Option<u32>,
@@ -238,6 +240,15 @@ struct RenderArgs {
     /// their sum, for `penumbra merge`.
     #[arg(long, value_name = "A..B")]
     passes: Option<penumbra::farm::split::Passes>,
+    /// Render every scene of a list file (one a line: SCENE [OUTPUT], relative
+    /// to the list) into the folder -o, in one process; outputs already
+    /// complete are skipped, so a rerun resumes.
+    #[arg(long, value_name = "LIST", conflicts_with_all = ["scene", "tile", "passes", "reference", "aov"])]
+    batch: Option<PathBuf>,
+    /// With --batch: render only task I's share of K (every K-th scene from
+    /// the I-th), for a job array.
+    #[arg(long, value_name = "I/K", requires = "batch")]
+    batch_task: Option<penumbra::farm::split::Tile>,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -277,8 +288,46 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         vector_width,
         tile,
         passes,
+        batch,
+        batch_task,
         limits,
     } = args;
+    let out = out.unwrap_or_else(|| PathBuf::from("out.png"));
+    let scene = match (scene, &batch) {
+        (Some(s), _) => s,
+        (None, Some(list)) => {
+            vector_width::apply(
+                vector_width,
+                vector_width::Job::Render {
+                    pixels: width.zip(height).map(|(w, h)| w as u64 * h as u64),
+                    passes: spp,
+                    time_budget,
+                },
+            );
+            let settings = penumbra::farm::batch::BatchSettings {
+                load: limits.load_options(width, height),
+                sampling: Sampling {
+                    spp,
+                    seed,
+                    time_budget,
+                },
+                area_samples,
+            };
+            let renderer = RendererOptions {
+                device,
+                validation: validate,
+                shaders: shaders.map(ShaderSource::Directory).unwrap_or_default(),
+                kernel: KernelOptions {
+                    accel,
+                    triangle_test,
+                    sampler,
+                    ..Default::default()
+                },
+            };
+            return render_batch(list, &out, batch_task, &renderer, &settings);
+        }
+        (None, None) => anyhow::bail!("render: a SCENE or --batch LIST is needed"),
+    };
     let split = tile.is_some() || passes.is_some();
     if split {
         let refuse =
@@ -478,6 +527,73 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `penumbra render --batch LIST -o DIR`: every scene of the list with one
+/// renderer (one device, one kernel cache), a line per scene, and one
+/// `error:` line at the end naming every scene that failed.
+fn render_batch(
+    list: &std::path::Path,
+    dir: &std::path::Path,
+    task: Option<penumbra::farm::split::Tile>,
+    renderer: &RendererOptions,
+    settings: &penumbra::farm::batch::BatchSettings,
+) -> anyhow::Result<()> {
+    use penumbra::farm::batch::{self, Outcome};
+    let t0 = Instant::now();
+    if !dir.is_dir() {
+        anyhow::bail!(
+            "{}: -o: the output folder of a batch must exist",
+            dir.display()
+        );
+    }
+    let mut entries = batch::read_list(list, dir)?;
+    if let Some(t) = task {
+        entries = batch::task_share(entries, t);
+    }
+    let mut renderer = Renderer::new(renderer)?;
+    let total = entries.len();
+    let results = batch::run(&mut renderer, &entries, settings, &mut |e, o| match o {
+        Outcome::Rendered(d) => println!(
+            "rendered {} -> {} in {}",
+            e.scene.display(),
+            e.output.display(),
+            ms(*d)
+        ),
+        Outcome::Skipped => println!(
+            "skipped {} ({} is complete)",
+            e.scene.display(),
+            e.output.display()
+        ),
+        Outcome::Failed(m) => eprintln!("failed: {m}"),
+    });
+    let failed: Vec<String> = results
+        .iter()
+        .filter(|(_, o)| matches!(o, Outcome::Failed(_)))
+        .map(|(e, _)| e.scene.display().to_string())
+        .collect();
+    let skipped = results
+        .iter()
+        .filter(|(_, o)| matches!(o, Outcome::Skipped))
+        .count();
+    println!(
+        "batch {}: {} scenes, {} rendered, {} skipped, {} failed in {}",
+        list.display(),
+        total,
+        total - skipped - failed.len(),
+        skipped,
+        failed.len(),
+        ms(t0.elapsed())
+    );
+    if !failed.is_empty() {
+        anyhow::bail!(
+            "{}: {} of {total} scenes failed: {}",
+            list.display(),
+            failed.len(),
+            failed.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// `penumbra render --reference`: the f64 CPU renderer, no Vulkan; the
 /// summary line in the style of the GPU path's.
 fn render_reference(
@@ -613,7 +729,11 @@ fn main() -> ExitCode {
     // temporary output file) and the exit status is 70 (EX_SOFTWARE).
     penumbra::panics::install_hook();
     match &cli.command {
-        Command::Render(a) => penumbra::panics::set_subject(a.scene.clone()),
+        Command::Render(a) => {
+            if let Some(s) = a.scene.clone().or(a.batch.clone()) {
+                penumbra::panics::set_subject(s)
+            }
+        }
         Command::Watch(a) => penumbra::panics::set_subject(a.scene.clone()),
         Command::Diff(a) => penumbra::panics::set_subject(a.b.clone()),
         Command::Merge(a) => penumbra::panics::set_subject(a.output.clone()),
