@@ -336,6 +336,12 @@ pub struct Results {
     /// peers inherit it): below 0 it ran ahead of other processes.
     #[serde(default)]
     pub nice: i64,
+    /// The nice value of the benchmark's autogroup (its session), where the
+    /// kernel groups processes by session: then the cores are shared between
+    /// sessions by this value, and a process's own nice ranks it only within
+    /// its session.
+    #[serde(default)]
+    pub autogroup_nice: Option<i64>,
     pub parts: Vec<PartInfo>,
     pub throughput: ThroughputPart,
     pub knob_rounds: usize,
@@ -881,6 +887,17 @@ fn own_nice() -> i64 {
         .unwrap_or(0)
 }
 
+/// The nice value of this process's autogroup, from /proc/self/autogroup
+/// (`/autogroup-5 nice -10`), when the kernel groups by session.
+fn autogroup_nice() -> Option<i64> {
+    let on = std::fs::read_to_string("/proc/sys/kernel/sched_autogroup_enabled").ok()?;
+    if on.trim() != "1" {
+        return None;
+    }
+    let text = std::fs::read_to_string("/proc/self/autogroup").ok()?;
+    text.split_whitespace().last()?.parse().ok()
+}
+
 /// Waits (at most 30 s per part and 120 s per run) until other processes
 /// use less than a third of a core over one second, so that measurements
 /// start on a quiet machine where possible; returns the seconds waited. The
@@ -1062,6 +1079,7 @@ fn main() -> anyhow::Result<()> {
     results.cpu = child(&args, p, "cpu", &[])?;
     results.cpu_info = machine::CpuInfo::read();
     results.nice = own_nice();
+    results.autogroup_nice = autogroup_nice();
     results.peers = if args.no_peers {
         peers::PeersPart {
             not_measured: Some("skipped by `--no-peers`".into()),

@@ -637,13 +637,22 @@ pub fn markdown(r: &Results) -> String {
         o,
         "This machine is shared: other processes (builds) sometimes take one of its 2 cores for minutes. Each part waits (up to 30 s) for a quiet second before it starts, and section 1 is repeated (up to three times) while others used more than half a core, keeping the quietest run. For every measuring process: its own CPU use (with its child processes: the peers) and everyone else's, averaged over its run (from /proc/stat), in cores; niced processes (nice > 0, which yield the cores to the benchmark) are counted apart and are not waited for. Ratios of interleaved variants are robust to this; absolute times of a part with other processes at ≈1 core are up to 2× slower.\n"
     );
-    if r.nice != 0 {
+    let (nice, what) = match r.autogroup_nice {
+        Some(n) => (
+            n,
+            "its session's autogroup, by which the kernel shares the cores between sessions",
+        ),
+        None => (
+            r.nice,
+            "its processes, inherited by its children and the peers",
+        ),
+    };
+    if nice != 0 {
         let _ = writeln!(
             o,
-            "The benchmark ran at nice {} (its children and the peers inherit it): on a contested core the kernel's scheduler gives each of its threads about {:.1}× the share of a thread at nice 0, so other processes disturbed it {} than their CPU time below suggests.\n",
-            r.nice,
-            1.25f64.powi(-r.nice as i32),
-            if r.nice < 0 { "less" } else { "more" }
+            "The benchmark ran at nice {nice} ({what}): on a contested core the scheduler gives it about {:.1}× the share of a nice-0 competitor, so other processes disturbed it {} than their CPU time below suggests.\n",
+            1.25f64.powi(-nice as i32),
+            if nice < 0 { "less" } else { "more" }
         );
     }
     let _ = writeln!(
