@@ -148,6 +148,7 @@ fi
 if [ "$dry_run" = 1 ]; then
   echo "setup.sh: dry run: would install: ${packages[*]:-nothing}${bp:+ (-t $bp)}"
   if [ "$want_layers" = 1 ]; then echo "setup.sh: dry run: would unpack Debian's main-suite lavapipe into target/ (tools/mesa_tree.sh)"; fi
+  if [ "$want_layers" = 1 ]; then echo "setup.sh: dry run: would install for the Slurm tests (unless present): slurmctld slurmd slurm-client munge"; fi
   exit 0
 fi
 
@@ -176,6 +177,25 @@ fi
 if [ "$want_layers" = 1 ]; then
   tools_dir="$(dirname "$0")"
   "$tools_dir/mesa_tree.sh"
+fi
+
+# --tests: a single-host Slurm cluster for the farm tests (tests/farm_slurm.rs starts it with
+# tools/slurm-local.sh), from the main suite (Debian 12: Slurm 22.05, the version the
+# set-up in tools/slurm-local.sh was found to work with).
+slurm_packages=(slurmctld slurmd slurm-client munge)
+if [ "$want_layers" = 1 ]; then
+  missing=()
+  for p in "${slurm_packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+  done
+  if [ "${#missing[@]}" -gt 0 ]; then
+    echo "setup.sh: installing for the Slurm tests: ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  else
+    echo "setup.sh: Slurm test packages present: ${slurm_packages[*]}"
+  fi
 fi
 
 if [ "$action" != keep ]; then
