@@ -698,11 +698,17 @@ pub fn standing_section(o: &mut String, r: &Results) {
         "| | This run | Verdict | AVX-512 machine |\n|---|---|---|---|"
     );
     let p = &r.peers;
-    for (peer, zen4) in [
-        ("mitsuba-llvm", ZEN4.mitsuba_llvm_ms),
-        ("mitsuba-scalar", ZEN4.mitsuba_scalar_ms),
-        ("embree-single", ZEN4.embree_single_ms),
-        ("embree-packets", ZEN4.embree_packets_ms),
+    // The AVX-512 machine's peers: Mitsuba 3.9.1 and Embree 3 (its packets
+    // 16 rays wide), as issue 19 gives them.
+    for (peer, zen4, there) in [
+        ("mitsuba-llvm", ZEN4.mitsuba_llvm_ms, "Mitsuba 3.9.1"),
+        ("mitsuba-scalar", ZEN4.mitsuba_scalar_ms, "Mitsuba 3.9.1"),
+        ("embree-single", ZEN4.embree_single_ms, "Embree 3"),
+        (
+            "embree-packets",
+            ZEN4.embree_packets_ms,
+            "Embree 3, 16-ray packets",
+        ),
     ] {
         let (now, verdict) = match p.valid(peer) {
             Some(m) => (
@@ -727,7 +733,7 @@ pub fn standing_section(o: &mut String, r: &Results) {
         };
         let _ = writeln!(
             o,
-            "| penumbra / {} | {now} | {verdict} | {:.2}× ({} vs {} ms) |",
+            "| penumbra / {} | {now} | {verdict} | {:.2}× ({} vs {} ms; {there}) |",
             label(peer),
             ZEN4.bunny_ms / zen4,
             ZEN4.bunny_ms,
