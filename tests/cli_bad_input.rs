@@ -978,3 +978,23 @@ fn an_internal_error_is_one_line_naming_the_file_and_leaves_no_output() {
         ],
     );
 }
+
+#[test]
+fn merge_refuses_a_part_claiming_an_image_larger_than_a_render() {
+    // A part file of 2.7 KiB whose windows claim a 2^20 x 2^20 image: refused
+    // from its header, before any pixel buffer is allocated.
+    let part = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/part_huge_window.exr");
+    let out_dir = tempfile::tempdir().unwrap();
+    let args: Vec<OsString> = vec![
+        "merge".into(),
+        part.clone().into(),
+        "-o".into(),
+        out_dir.path().join("out.png").into(),
+    ];
+    let out = penumbra(&args, &[]);
+    let must = format!(
+        "{}: displayWindow: 1048576x1048576 is larger than a render can be (16384 pixels a side)",
+        part.display()
+    );
+    assert_fails(&out, out_dir.path(), &[], Shape::OneLine, &[&must]);
+}

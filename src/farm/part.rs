@@ -175,6 +175,18 @@ pub fn read_info(path: &Path) -> Result<PartInfo, PartError> {
             "expected a full image at (0, 0)".into(),
         ));
     }
+    // A render is at most MAX_IMAGE_SIDE a side: a header claiming more is
+    // not from penumbra, and reading its pixels would allocate for them.
+    let side = crate::scene::MAX_IMAGE_SIDE as usize;
+    if display.size.0 > side || display.size.1 > side {
+        return Err(field(
+            "displayWindow",
+            format!(
+                "{}x{} is larger than a render can be ({side} pixels a side)",
+                display.size.0, display.size.1
+            ),
+        ));
+    }
     let (width, height) = (display.size.0 as u32, display.size.1 as u32);
     let rows = tile.rows(height).map_err(|e| field(TILE, e))?;
     let pos = header.own_attributes.layer_position;

@@ -4,8 +4,9 @@
 //!
 //! ```text
 //! cargo run --release --example fuzz -- [--cases N] [--seconds S] [--seed S]
-//!     [--jobs J] [--targets json,gltf,glb,wgsl] [--out DIR]
+//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR]
 //! cargo run --release --example fuzz -- --replay FILE...
+//! cargo run --release --example fuzz -- --write-seeds DIR
 //! ```
 //!
 //! Runs on stable Rust without cargo-fuzz. Cases run in worker processes
@@ -43,12 +44,13 @@ struct Args {
     out: PathBuf,
     worker: Option<usize>,
     replay: Vec<PathBuf>,
+    write_seeds: Option<PathBuf>,
 }
 
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
     eprintln!(
-        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl] [--out DIR] | --replay FILE..."
+        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR] | --replay FILE..."
     );
     std::process::exit(2)
 }
@@ -63,6 +65,7 @@ fn parse_args() -> Args {
         out: seeds::root().join("target/fuzz/failures"),
         worker: None,
         replay: Vec::new(),
+        write_seeds: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -102,6 +105,7 @@ fn parse_args() -> Args {
             "--out" => a.out = PathBuf::from(value("--out")),
             "--worker" => a.worker = Some(num("--worker", value("--worker")) as usize),
             "--replay" => a.replay.extend(it.by_ref().map(PathBuf::from)),
+            "--write-seeds" => a.write_seeds = Some(PathBuf::from(value("--write-seeds"))),
             other => usage(&format!("unknown argument `{other}`")),
         }
     }
@@ -114,6 +118,19 @@ fn main() -> ExitCode {
     std::panic::set_hook(Box::new(|_| {}));
     if !args.replay.is_empty() {
         return replay(&args.replay);
+    }
+    if let Some(dir) = &args.write_seeds {
+        // The seeds as files, to replay or to feed another fuzzer.
+        let _ = std::fs::create_dir_all(dir);
+        for (i, s) in seeds::all().iter().enumerate() {
+            let path = dir.join(format!("{i:02}.{}", s.target.ext()));
+            if let Err(e) = std::fs::write(&path, &s.data) {
+                eprintln!("error: {}: {e}", path.display());
+                return ExitCode::FAILURE;
+            }
+            println!("{}: {}", path.display(), s.name);
+        }
+        return ExitCode::SUCCESS;
     }
     match args.worker {
         Some(id) => worker(&args, id),
@@ -346,6 +363,16 @@ fn make_case(
                 }
             }
             if rng.one_in(4) {
+                mutate::mutate_bytes(&mut data, byte_donors, rng);
+            }
+            data
+        }
+        Target::Part => {
+            let mut data = seed.data.clone();
+            if rng.one_in(2) {
+                mutate::mutate_exr_windows(&mut data, rng);
+            }
+            if rng.one_in(2) {
                 mutate::mutate_bytes(&mut data, byte_donors, rng);
             }
             data

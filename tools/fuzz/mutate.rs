@@ -421,6 +421,31 @@ pub fn mutate_bytes(data: &mut Vec<u8>, donors: &[Vec<u8>], rng: &mut Rng) {
     }
 }
 
+/// Sets an OpenEXR part's display and data windows to sizes at an edge,
+/// kept consistent with each other (the data window is the top half, tile
+/// 0 of 2), so that the file passes the header checks and reaches the
+/// pixel reader with the window it claims.
+pub fn mutate_exr_windows(data: &mut [u8], rng: &mut Rng) {
+    let sides: [i64; 9] = [1, 2, 16, 17, 16384, 16385, 46341, 1 << 20, i32::MAX as i64];
+    let (w, h) = (*rng.pick(&sides), *rng.pick(&sides) & !1);
+    let h = h.max(2);
+    let mut set = |name: &[u8], b: [i64; 4]| {
+        let key = [name, b"\0box2i\0"].concat();
+        let Some(i) = data.windows(key.len()).position(|x| x == key.as_slice()) else {
+            return;
+        };
+        let at = i + key.len() + 4;
+        if let Some(slot) = data.get_mut(at..at + 16) {
+            for (k, v) in b.iter().enumerate() {
+                let v = (*v).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+                slot[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+    };
+    set(b"displayWindow", [0, 0, w - 1, h - 1]);
+    set(b"dataWindow", [0, 0, w - 1, h / 2 - 1]);
+}
+
 /// Applies one to four token-level mutations to WGSL: a token replaced by
 /// another from the same text, a line deleted, duplicated or swapped, an
 /// operator or literal at an edge, or deep nesting.

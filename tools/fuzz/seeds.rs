@@ -86,7 +86,44 @@ pub fn all() -> Vec<Seed> {
     ] {
         seeds.extend(file(Target::Wgsl, &r.join("shaders/shading").join(name)));
     }
+    // Tile 0 of 2; the harness merges each mutated copy with a valid tile 1.
+    let (name, data) = part(0);
+    seeds.push(Seed {
+        target: Target::Part,
+        name,
+        data,
+    });
     seeds
+}
+
+/// Tile `index` of 2 of a 16x32 render with 4 passes, as `penumbra render
+/// --tile` writes it (`farm::part::write`): the seed of the part target.
+pub fn part(index: u32) -> (String, Vec<u8>) {
+    use penumbra::farm::part::{self, PartInfo};
+    use penumbra::farm::split::{Passes, Tile};
+    let info = PartInfo {
+        render: "0123456789abcdef".repeat(4),
+        scene: "fuzz.json".into(),
+        tile: Tile { index, count: 2 },
+        passes: Passes { start: 0, end: 4 },
+        spp: 4,
+        width: 16,
+        height: 32,
+        rows: 16 * index..16 * index + 16,
+    };
+    let pixels = (0..16 * 16)
+        .map(|i| [i as f32 * 0.25, 1.0, 2.0, 1.0])
+        .collect();
+    let image = penumbra::render::Image {
+        width: 16,
+        height: 16,
+        pixels,
+    };
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("part.exr");
+    part::write(&path, &info, &image).expect("a valid part file");
+    let data = std::fs::read(&path).expect("the part file just written");
+    (format!("generated part {index}/2"), data)
 }
 
 /// Little-endian bytes of `f32` values, base64-encoded in a data URI.

@@ -22,11 +22,20 @@ pub enum Target {
     Glb,
     /// A shading WGSL file in the full kernel (naga parse, validation, SPIR-V).
     Wgsl,
+    /// A part file of a split render (`.exr`), merged with a valid second
+    /// part by `penumbra merge`'s `plan` and `write`.
+    Part,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 4] = [Target::Json, Target::Gltf, Target::Glb, Target::Wgsl];
+    pub const ALL: [Target; 5] = [
+        Target::Json,
+        Target::Gltf,
+        Target::Glb,
+        Target::Wgsl,
+        Target::Part,
+    ];
 
     /// The file extension (also the name on the command line).
     pub fn ext(self) -> &'static str {
@@ -35,6 +44,7 @@ impl Target {
             Target::Gltf => "gltf",
             Target::Glb => "glb",
             Target::Wgsl => "wgsl",
+            Target::Part => "exr",
         }
     }
 
@@ -81,6 +91,8 @@ impl Workspace {
         if unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) } != 0 {
             return Err(std::io::Error::last_os_error());
         }
+        // The valid part that each mutated one is merged with.
+        std::fs::write(dir.join("other.exr"), super::seeds::part(1).1)?;
         let kernel = ShaderSource::Embedded
             .assemble()
             .map_err(std::io::Error::other)?;
@@ -140,6 +152,28 @@ impl Workspace {
                         .compile(&self.features, &KernelOptions::default())
                         .map(|_| ())
                         .map_err(|e| e.to_string())
+                });
+            }
+            Target::Part => {
+                let path = self.case_path(target);
+                let other = self.dir.join("other.exr");
+                len = data.len() + std::fs::metadata(&other).map_or(0, |m| m.len() as usize);
+                if let Err(e) = std::fs::write(&path, data) {
+                    return Outcome {
+                        verdict: Verdict::Err,
+                        message: format!("cannot write the case: {e}"),
+                        time: Duration::ZERO,
+                        peak: 0,
+                    };
+                }
+                let out = self
+                    .dir
+                    .join(if restrict { "merged.png" } else { "merged.exr" });
+                judge::start_case();
+                result = penumbra::panics::catch(|| {
+                    let plan = penumbra::farm::merge::plan(&[path.clone(), other.clone()])
+                        .map_err(|e| format!("{e:#}"))?;
+                    penumbra::farm::merge::write(&plan, &out).map_err(|e| format!("{e:#}"))
                 });
             }
             _ => {
