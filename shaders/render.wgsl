@@ -60,7 +60,10 @@ struct PushConstants {
     pass_index: u32,
     // Seed of every random choice.
     seed: u32,
-    _pad: u32,
+    // Index of the first pixel the image buffer holds: 0, or the first pixel
+    // of the band of rows that one part of a split render holds
+    // (`render --tile`), so that a tile needs a buffer of its own size only.
+    slot_base: u32,
 }
 
 const FLAG_WARM_UP: u32 = 1u;
@@ -108,9 +111,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         var value = vec4<f32>(colour, alpha);
         if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {
-            value += image[pixel];
+            value += image[pixel - push.slot_base];
         }
-        image[pixel] = value;
+        image[pixel - push.slot_base] = value;
         primary = 1u;
     }
     // One global atomic per subgroup instead of one per pixel. (Summing

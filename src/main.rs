@@ -669,7 +669,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             height: settings.height,
             rows: rows.clone(),
         };
-        let uploaded = renderer.upload(&scene_data)?;
+        let uploaded = renderer.upload_for_parts(&scene_data)?;
         let part = penumbra::render::PartRange {
             rows,
             passes: passes.start..passes.end,

@@ -302,3 +302,28 @@ fn bad_split_values_are_one_error_naming_the_flag() {
         fails(&showcase_args(&extra), d, &[needle], out);
     }
 }
+
+#[test]
+fn a_tile_of_an_image_too_large_for_one_device_buffer_renders() {
+    // 4096x4096 needs a 256 MiB image buffer, over lavapipe's 128 MiB
+    // maxStorageBufferRange; a tile needs only its rows' buffer.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = repo("scenes/showcase.json");
+    let big = [
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "4096",
+        "--height",
+        "4096",
+    ];
+    ok(&[&big[..], &["--tile", "5/8", "-o", "p.exr"]].concat(), d);
+    let info = part::read_info(&d.join("p.exr")).unwrap();
+    assert_eq!(
+        (info.width, info.height, info.rows.clone()),
+        (4096, 4096, 2560..3072)
+    );
+    let px = part::read_pixels(&d.join("p.exr"), &info).unwrap();
+    assert!(px.iter().any(|p| p[0] > 0.0), "the tile is black");
+}

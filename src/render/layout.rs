@@ -59,7 +59,7 @@ pub struct PushConstants {
     pub flags: u32,
     pub pass_index: u32,
     pub seed: u32,
-    pub _pad: u32,
+    pub slot_base: u32,
 }
 
 /// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
@@ -554,7 +554,7 @@ mod tests {
             layout!(
                 "PushConstants",
                 PushConstants,
-                [origin, size, flags, pass_index, seed, _pad]
+                [origin, size, flags, pass_index, seed, slot_base]
             ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),

@@ -481,8 +481,22 @@ impl Renderer {
     /// can be rendered many times, at any size up to the scene's own, and
     /// survives shader edits (see [`Renderer::render_uploaded`]).
     pub fn upload(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
+        self.upload_inner(scene, true)
+    }
+
+    /// [`Renderer::upload`] for [`Renderer::render_part`] only: no image
+    /// buffer of the full size is made or required (each part makes one for
+    /// its own rows), so the image may be larger than the device's
+    /// `maxStorageBufferRange` allows for one buffer.
+    pub fn upload_for_parts(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
+        self.upload_inner(scene, false)
+    }
+
+    fn upload_inner(&mut self, scene: &Scene, image: bool) -> Result<UploadedScene, RenderError> {
         let (width, height) = (scene.camera.width, scene.camera.height);
-        self.check_size(width, height)?;
+        // Parts check their own band's buffer (render_part).
+        self.check_size(width, if image { height } else { 1 })?;
+        self.check_size(1, height)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let layout = t0.elapsed();
@@ -496,7 +510,10 @@ impl Renderer {
         let storage = |label: &str, bytes: &[u8]| {
             ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
         };
-        let image_bytes = width as u64 * height as u64 * 16;
+        let image_bytes = match image {
+            true => width as u64 * height as u64 * 16,
+            false => 16,
+        };
         // The kernel reads the first light before it knows whether there is
         // one (shaders/lights.wgsl, first_light): upload at least one.
         let no_light = [layout::Light::zeroed()];
@@ -707,9 +724,40 @@ impl Renderer {
         } else {
             None
         };
+        // A part renders into a buffer of its own rows (push.slot_base).
+        let band_buffer = match part {
+            Some(p) => {
+                let bytes = width as u64 * (p.rows.end - p.rows.start) as u64 * 16;
+                let max = ctx.limits().max_storage_buffer_range;
+                if bytes > max {
+                    return Err(RenderError::Scene {
+                        field: "--tile".into(),
+                        message: format!(
+                            "rows {}..{} of {width} pixels need a {:.1} MiB buffer, more than this device's maxStorageBufferRange of {:.1} MiB: use more tiles",
+                            p.rows.start,
+                            p.rows.end,
+                            bytes as f64 / 1048576.0,
+                            max as f64 / 1048576.0
+                        ),
+                    });
+                }
+                Some(ctx.create_buffer("image band", BufferUsage::Storage, bytes)?)
+            }
+            None => None,
+        };
+        let full = width as u64 * height as u64 * 16;
+        if part.is_none() && scene.bound[7].buffer()?.size() < full {
+            return Err(RenderError::Scene {
+                field: "camera.width/camera.height".into(),
+                message: "the scene was uploaded for parts only (Renderer::upload_for_parts): render it with render_part".into(),
+            });
+        }
         let mut refs: Vec<_> = scene.bound.iter().map(Bound::resource).collect();
         if let Some(b) = &aov_buffer {
             refs[13] = b.into();
+        }
+        if let Some(b) = &band_buffer {
+            refs[7] = b.into();
         }
         let pipeline = &self.pipelines[&(features, key_kernel)];
         let rows = part.map_or(0..height, |p| p.rows.clone());
@@ -739,7 +787,7 @@ impl Renderer {
                 pass_index: first_pass + passes,
                 seed: sampling.seed,
                 flags: if passes == 0 { FLAG_FRESH } else { 0 },
-                ..Zeroable::zeroed()
+                slot_base: rows.start * width,
             };
             match cancel.as_mut() {
                 None => {
@@ -778,17 +826,16 @@ impl Renderer {
         }
 
         let t1 = Instant::now();
-        let image_bytes = ctx.read_buffer(scene.bound[7].buffer()?)?;
+        let image_bytes = match &band_buffer {
+            Some(b) => ctx.read_buffer(b)?,
+            None => ctx.read_buffer(scene.bound[7].buffer()?)?,
+        };
         let n = width as usize * height as usize;
         let mut pixels: Vec<[f32; 4]> = match part {
             None => bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]),
             Some(_) => {
-                let row_bytes = width as usize * 16;
-                let (a, b) = (
-                    rows.start as usize * row_bytes,
-                    rows.end as usize * row_bytes,
-                );
-                bytemuck::pod_collect_to_vec(&image_bytes[a..b])
+                let n = width as usize * (rows.end - rows.start) as usize;
+                bytemuck::pod_collect_to_vec(&image_bytes[..n * 16])
             }
         };
         if passes > 1 && part.is_none() {
