@@ -327,3 +327,70 @@ fn a_tile_of_an_image_too_large_for_one_device_buffer_renders() {
     let px = part::read_pixels(&d.join("p.exr"), &info).unwrap();
     assert!(px.iter().any(|p| p[0] > 0.0), "the tile is black");
 }
+
+#[test]
+fn farm_slurm_writes_a_script_or_one_error_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("scenes")).unwrap();
+    for f in ["showcase.json", "bunny.glb"] {
+        std::fs::copy(repo("scenes").join(f), d.join("scenes").join(f)).unwrap();
+    }
+    let farm = ["farm", "slurm", "scenes/showcase.json", "--height", "180"];
+    for (extra, needle) in [
+        (
+            vec!["-o", "x.png", "--tiles", "1000"],
+            "--tiles: 1000 tiles",
+        ),
+        (vec!["-o", "x.tif", "--tiles", "2"], "x.tif"),
+        (
+            vec!["-o", "x.png", "--sample-splits", "5", "--spp", "4"],
+            "--sample-splits",
+        ),
+        (vec!["-o", "x.png"], "--tiles N"),
+    ] {
+        fails(
+            &[&farm[..], &extra[..]].concat(),
+            d,
+            &[needle],
+            "x.png.farm",
+        );
+    }
+    fails(
+        &["farm", "slurm", "nope.json", "-o", "x.png", "--tiles", "2"],
+        d,
+        &["nope.json"],
+        "x.png.farm",
+    );
+    // Without --submit it only writes the script (no Slurm needed).
+    ok(
+        &[
+            &farm[..],
+            &[
+                "-o",
+                "out/x.png",
+                "--tiles",
+                "4",
+                "--sample-splits",
+                "2",
+                "--spp",
+                "8",
+            ],
+        ]
+        .concat(),
+        d,
+    );
+    let script = d.join("out/x.png.farm/job.sh");
+    let text = std::fs::read_to_string(&script).unwrap();
+    assert!(
+        text.contains("tiles=4\nsplits=2\n") && text.contains("tasks=8"),
+        "{text}"
+    );
+    assert!(!text.contains(d.to_str().unwrap()));
+    let n = Command::new("bash")
+        .arg("-n")
+        .arg(&script)
+        .status()
+        .unwrap();
+    assert!(n.success());
+}
