@@ -10,7 +10,7 @@
 //! * the area-light scene in 4 sample splits of 64 spp is within the stated
 //!   bound of a single 64-spp render;
 //! * a batch of 20 scenes, one broken, in 4 tasks renders 19 images and
-//!   names the broken one.
+//!   names the broken one; fixed, `--resume` reruns that task alone.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -236,4 +236,19 @@ fn farm_slurm_on_a_local_cluster() {
     assert!(log.contains("f13.json"), "{log}");
     let images = std::fs::read_dir(d.join("frames")).unwrap().count();
     assert_eq!(images, 19, "{t}");
+    // Fixed, --resume resubmits task 1 alone, which renders only f13.
+    let fixed = std::fs::read_to_string(d.join("f13.json"))
+        .unwrap()
+        .replace("-1", "1");
+    std::fs::write(d.join("f13.json"), fixed).unwrap();
+    let resumed = ok(
+        &[
+            "farm", "slurm", "--batch", "list.txt", "--tasks", "4", "-o", "frames", "--resume",
+        ],
+        d,
+    );
+    assert!(resumed.contains("resubmitting tasks [1]"), "{resumed}");
+    let log = std::fs::read_to_string(d.join("frames.farm/logs/task-1.log")).unwrap();
+    assert!(log.contains("1 rendered, 4 skipped"), "{log}");
+    assert_eq!(std::fs::read_dir(d.join("frames")).unwrap().count(), 20);
 }
