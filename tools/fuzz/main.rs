@@ -346,20 +346,7 @@ fn make_case(
             if let Some((json, rest)) = glb_json(&data) {
                 if let Ok(mut v) = serde_json::from_slice::<serde_json::Value>(json) {
                     mutate::mutate_json(&mut v, json_donors, rng);
-                    let mut j = serde_json::to_vec(&v).unwrap_or_default();
-                    while !j.len().is_multiple_of(4) {
-                        j.push(b' ');
-                    }
-                    let total = 12 + 8 + j.len() + rest.len();
-                    let mut out = Vec::with_capacity(total);
-                    out.extend(b"glTF");
-                    out.extend(2u32.to_le_bytes());
-                    out.extend((total as u32).to_le_bytes());
-                    out.extend((j.len() as u32).to_le_bytes());
-                    out.extend(b"JSON");
-                    out.extend(j);
-                    out.extend(rest);
-                    data = out;
+                    data = seeds::glb(serde_json::to_vec(&v).unwrap_or_default(), rest);
                 }
             }
             if rng.one_in(4) {

@@ -223,15 +223,23 @@ fn generated_gltf() -> Vec<Value> {
 fn to_glb(doc: &Value, bin: &[u8]) -> Option<Vec<u8>> {
     let mut doc = doc.clone();
     doc["buffers"][0].as_object_mut()?.remove("uri");
-    let mut json = serde_json::to_vec(&doc).ok()?;
+    let mut chunk = bin.to_vec();
+    while !chunk.len().is_multiple_of(4) {
+        chunk.push(0);
+    }
+    let mut rest = (chunk.len() as u32).to_le_bytes().to_vec();
+    rest.extend(b"BIN\0");
+    rest.extend(chunk);
+    Some(glb(serde_json::to_vec(&doc).ok()?, &rest))
+}
+
+/// A GLB container: the header, `json` as the JSON chunk (padded with
+/// spaces to 4 bytes), then `rest` as it is (further chunks, or bytes).
+pub fn glb(mut json: Vec<u8>, rest: &[u8]) -> Vec<u8> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total = 12 + 8 + json.len() + rest.len();
     let mut out = Vec::with_capacity(total);
     out.extend(b"glTF");
     out.extend(2u32.to_le_bytes());
@@ -239,10 +247,8 @@ fn to_glb(doc: &Value, bin: &[u8]) -> Option<Vec<u8>> {
     out.extend((json.len() as u32).to_le_bytes());
     out.extend(b"JSON");
     out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    Some(out)
+    out.extend(rest);
+    out
 }
 
 /// JSON scenes with every object, light and shader kind.

@@ -67,6 +67,16 @@ pub struct Outcome {
     pub peak: usize,
 }
 
+/// Writes a case file; a failure is an outcome of its own (not the loader's).
+fn write_case(path: &Path, data: &[u8]) -> Result<(), Outcome> {
+    std::fs::write(path, data).map_err(|e| Outcome {
+        verdict: Verdict::Err,
+        message: format!("cannot write the case: {e}"),
+        time: Duration::ZERO,
+        peak: 0,
+    })
+}
+
 /// A worker's folder: the case file, the files seeds reference, and the
 /// traps that mutated URIs point at (a FIFO, a file outside the folder).
 pub struct Workspace {
@@ -158,13 +168,8 @@ impl Workspace {
                 let path = self.case_path(target);
                 let other = self.dir.join("other.exr");
                 len = data.len() + std::fs::metadata(&other).map_or(0, |m| m.len() as usize);
-                if let Err(e) = std::fs::write(&path, data) {
-                    return Outcome {
-                        verdict: Verdict::Err,
-                        message: format!("cannot write the case: {e}"),
-                        time: Duration::ZERO,
-                        peak: 0,
-                    };
+                if let Err(o) = write_case(&path, data) {
+                    return o;
                 }
                 let out = self
                     .dir
@@ -179,13 +184,8 @@ impl Workspace {
             _ => {
                 let path = self.case_path(target);
                 len = data.len() + 67 * 1024; // the case and the bunny.glb it may reference
-                if let Err(e) = std::fs::write(&path, data) {
-                    return Outcome {
-                        verdict: Verdict::Err,
-                        message: format!("cannot write the case: {e}"),
-                        time: Duration::ZERO,
-                        peak: 0,
-                    };
+                if let Err(o) = write_case(&path, data) {
+                    return o;
                 }
                 let opts = LoadOptions {
                     restrict_paths: restrict,
