@@ -156,7 +156,15 @@ fn replay(files: &[PathBuf]) -> ExitCode {
             return ExitCode::FAILURE;
         };
         let data = std::fs::read(f).unwrap_or_default();
-        let o = ws.run(target, &data, "phong.wgsl", false);
+        // A WGSL file replaces the shading file of its name (else phong.wgsl).
+        let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let shading = ["blinn_phong.wgsl", "checker.wgsl", "shader.wgsl"];
+        let name = if shading.contains(&name) {
+            name
+        } else {
+            "phong.wgsl"
+        };
+        let o = ws.run(target, &data, name, false);
         bugs += usize::from(o.verdict.is_bug());
         println!(
             "{}: {} in {:.1} ms, peak {} KiB: {}",

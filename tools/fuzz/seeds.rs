@@ -205,7 +205,7 @@ fn generated_gltf() -> Vec<Value> {
             {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
             {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
             {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"},
-            {"componentType": 5126, "count": 4, "type": "VEC3",
+            {"componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0],
              "sparse": {"count": 1, "indices": {"bufferView": 1, "componentType": 5123},
                         "values": {"bufferView": 0}}}
         ]
