@@ -514,36 +514,37 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         limits,
     } = args;
     let out = out.unwrap_or_else(|| PathBuf::from("out.png"));
+    let job = vector_width::Job::Render {
+        pixels: width.zip(height).map(|(w, h)| w as u64 * h as u64),
+        passes: spp,
+        time_budget,
+    };
+    let sampling = Sampling {
+        spp,
+        seed,
+        time_budget,
+    };
+    let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
+    let kernel = KernelOptions {
+        accel,
+        triangle_test,
+        sampler,
+        ..Default::default()
+    };
     let scene = match (scene, &batch) {
         (Some(s), _) => s,
         (None, Some(list)) => {
-            vector_width::apply(
-                vector_width,
-                vector_width::Job::Render {
-                    pixels: width.zip(height).map(|(w, h)| w as u64 * h as u64),
-                    passes: spp,
-                    time_budget,
-                },
-            );
+            vector_width::apply(vector_width, job);
             let settings = penumbra::farm::batch::BatchSettings {
                 load: limits.load_options(width, height),
-                sampling: Sampling {
-                    spp,
-                    seed,
-                    time_budget,
-                },
+                sampling,
                 area_samples,
             };
             let renderer = RendererOptions {
                 device,
                 validation: validate,
-                shaders: shaders.map(ShaderSource::Directory).unwrap_or_default(),
-                kernel: KernelOptions {
-                    accel,
-                    triangle_test,
-                    sampler,
-                    ..Default::default()
-                },
+                shaders,
+                kernel,
             };
             return render_batch(list, &out, batch_task, &renderer, &settings);
         }
@@ -575,16 +576,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
-    let vector_width = (!reference).then(|| {
-        vector_width::apply(
-            vector_width,
-            vector_width::Job::Render {
-                pixels: width.zip(height).map(|(w, h)| w as u64 * h as u64),
-                passes: spp,
-                time_budget,
-            },
-        )
-    });
+    let vector_width = (!reference).then(|| vector_width::apply(vector_width, job));
     // Refuse an unwritable output before spending time on the render.
     let format = output::check_writable(&out)?;
     if aov.is_some() && format != output::Format::Exr {
@@ -593,14 +585,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             out.display()
         );
     }
-    let shaders = shaders.map(ShaderSource::Directory).unwrap_or_default();
     let shader_source = shaders.clone();
-    let kernel = KernelOptions {
-        accel,
-        triangle_test,
-        sampler,
-        ..Default::default()
-    };
     // The device first, so that the loader refuses a scene the device cannot
     // hold before expanding it.
     let mut renderer = match reference {
@@ -629,17 +614,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     let Some(renderer) = renderer.as_mut() else {
-        let sampling = Sampling {
-            spp,
-            seed,
-            time_budget,
-        };
         return render_reference(&scene_data, &sampling, &kernel, &out, load, aov);
-    };
-    let sampling = Sampling {
-        spp,
-        seed,
-        time_budget,
     };
     if split {
         let settings = penumbra::farm::identity::RenderSettings {

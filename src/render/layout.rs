@@ -647,6 +647,7 @@ mod tests {
             ("BVH_NONE", NONE),
             ("NO_NORMALS", NO_NORMALS),
             ("FLAG_WARM_UP", FLAG_WARM_UP),
+            ("FLAG_FRESH", FLAG_FRESH),
             ("SHADER_PHONG", SHADER_PHONG),
             ("SHADER_BLINN_PHONG", SHADER_BLINN_PHONG),
             ("SHADER_CHECKER", SHADER_CHECKER),

@@ -23,6 +23,7 @@ use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 
 use serde::{Deserialize, Serialize};
 
+use crate::report::{int, ratio, st};
 use crate::{Args, Results, Stat};
 use penumbra::render::KernelOptions;
 use penumbra::scene::{Phong, Scene, Shader};
@@ -372,26 +373,6 @@ pub fn part(args: &Args) -> anyhow::Result<PeersPart> {
 }
 
 // ---------------------------------------------------------------- report
-
-fn int(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
-fn st(s: &Stat) -> String {
-    format!("{:.1} [{:.1}–{:.1}]", s.median, s.min, s.max)
-}
-
-fn ratio(s: &Stat) -> String {
-    format!("{:.2} [{:.2}–{:.2}]", s.median, s.min, s.max)
-}
 
 /// The figures of the previous report, from the AVX-512 machine (AMD Zen 4,
 /// 2 cores): docs/bench.md at commit 0e1b0cd, 2026-11-22, and the peers'

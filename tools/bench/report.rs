@@ -72,15 +72,17 @@ fn f1(x: f64) -> String {
 }
 
 /// `median [min–max]` in ms.
-fn st(s: &Stat) -> String {
+pub(crate) fn st(s: &Stat) -> String {
     format!("{:.1} [{:.1}–{:.1}]", s.median, s.min, s.max)
 }
 
-fn ratio(s: &Stat) -> String {
+/// A ratio's `median [min–max]`.
+pub(crate) fn ratio(s: &Stat) -> String {
     format!("{:.2} [{:.2}–{:.2}]", s.median, s.min, s.max)
 }
 
-fn int(n: u64) -> String {
+/// `n` with thousands separators (`858,452`).
+pub(crate) fn int(n: u64) -> String {
     let s = n.to_string();
     let mut out = String::new();
     for (i, c) in s.chars().enumerate() {
