@@ -1,10 +1,6 @@
 // The nearest intersection along a ray, and the normal the ray carries back.
 
-const KIND_PLANE: u32 = 0u;
-const KIND_SPHERE: u32 = 1u;
-const KIND_TRIANGLE: u32 = 2u;
-// A hit record that matches no primitive.
-const KIND_NONE: u32 = 0xffffffffu;
+// (The kinds of primitive a ray can hit are in stages/records.wgsl.)
 
 struct Hit {
     found: bool,

@@ -1,6 +1,8 @@
 // Directional, point and spot lights, and area lights (rectangle, sphere).
-// The host pre-multiplies the diffuse and specular colours by the intensity;
-// the ambient colour is not scaled.
+// A light has an intensity and ambient, diffuse and specular colours; the
+// shade stage hands a shader the intensity times the falloff
+// (shaders/shading/interface.wgsl: LightSample), and the ambient colour
+// unscaled.
 //
 // An area light of intensity I is the limit of N point lights of intensity
 // I/N spread uniformly over its surface (for the rectangle each weighted by
@@ -32,14 +34,14 @@ struct Light {
     radius: f32,
     // Rectangle edges.
     edge1: vec3<f32>,
-    _pad0: u32,
+    intensity: f32,
     edge2: vec3<f32>,
     _pad1: u32,
 }
 
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 
-// lights[0], read by the kernel's first statement. lavapipe loads data at a
+// lights[0], read by the light stage's first statement. lavapipe loads data at a
 // uniform address once per SIMD group only outside all branches and loops;
 // inside them every lane loads for itself, and the light loop is inside
 // both (0.95x the bunny frame: docs/bench.md §6). The host always uploads at
@@ -48,7 +50,7 @@ var<private> first_light: Light;
 
 // What a light delivers at a point: the unit direction towards it, the
 // distance a shadow ray must cover, and the falloff factor.
-struct LightSample {
+struct SampledLight {
     to_light: vec3<f32>,
     distance: f32,
     falloff: f32,
@@ -64,9 +66,9 @@ fn light_sample_count(light: Light) -> u32 {
 
 // Sample `uv` in [0, 1)² of light `light` as seen from `p`. For area lights
 // the falloff includes the 1/N of each of the N point lights.
-fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> LightSample {
+fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> SampledLight {
     if HAS_DIRECTIONAL && light.kind == LIGHT_DIRECTIONAL {
-        return LightSample(-light.direction, FAR, 1.0);
+        return SampledLight(-light.direction, FAR, 1.0);
     }
     if HAS_AREA_LIGHTS && light.kind >= LIGHT_RECT {
         var x: vec3<f32>;
@@ -82,7 +84,7 @@ fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> LightSample {
         let d = x - p;
         let dist2 = dot(d, d);
         if dist2 == 0.0 {
-            return LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, 0.0);
+            return SampledLight(vec3<f32>(0.0, 0.0, 1.0), 0.0, 0.0);
         }
         let dist = sqrt(dist2);
         let l = d / dist;
@@ -90,14 +92,14 @@ fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> LightSample {
         if light.kind == LIGHT_RECT {
             falloff *= max(0.0, dot(light.direction, -l));
         }
-        return LightSample(l, dist, falloff);
+        return SampledLight(l, dist, falloff);
     }
     let d = light.position - p;
     let dist2 = dot(d, d);
     let dist = sqrt(dist2);
     // Inverse-square falloff; a point exactly at the light gets none.
     if dist2 == 0.0 {
-        return LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, 0.0);
+        return SampledLight(vec3<f32>(0.0, 0.0, 1.0), 0.0, 0.0);
     }
     let l = d / dist;
     var falloff = 1.0 / dist2;
@@ -105,5 +107,5 @@ fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> LightSample {
         let a = clamp(dot(light.direction, -l) * light.cone_scale + light.cone_offset, 0.0, 1.0);
         falloff *= a * a;
     }
-    return LightSample(l, dist, falloff);
+    return SampledLight(l, dist, falloff);
 }

@@ -3,6 +3,13 @@
 // Ray/Triangle Intersection", JCGT 2013): the axis along which |dir| is
 // largest (kz), the two others (kx, ky, swapped when dir[kz] < 0 to keep the
 // winding), and the shear that maps dir onto +z.
+
+// Which ray/triangle test the kernel uses (render::TriangleTest; the tests
+// are in primitives/triangle.wgsl). The watertight one needs the shear below.
+const TRIANGLE_UV_FIRST: u32 = 0u;
+const TRIANGLE_T_FIRST: u32 = 1u;
+const TRIANGLE_WATERTIGHT: u32 = 2u;
+
 struct Ray {
     origin: vec3<f32>,
     dir: vec3<f32>,
@@ -34,10 +41,6 @@ fn make_ray(origin: vec3<f32>, dir: vec3<f32>) -> Ray {
     }
     return ray;
 }
-
-// Farther than anything in a scene; used as "no hit yet" and as the length
-// of shadow rays towards directional lights.
-const FAR: f32 = 3.0e38;
 
 fn ray_at(ray: Ray, t: f32) -> vec3<f32> {
     return ray.origin + t * ray.dir;

@@ -1,7 +1,10 @@
-// penumbra's compute kernel: one invocation per pixel.
-// The host concatenates the files of this tree (see src/render/compile.rs);
-// WGSL declarations are order-independent, so each concept file declares its
-// own data layout, binding and functions.
+// What every engine stage shares: the scene's feature overrides, the
+// globals, the push constants and the ray counters. The renderer runs a
+// frame as a chain of stages (shaders/stages/, after pbrt-v4's wavefront
+// integrator); each stage is its own module, concatenated by the host from
+// the files it needs (src/render/stages.rs). WGSL declarations are
+// order-independent, so each concept file declares its own data layout,
+// binding and functions.
 //
 // All positions arrive camera-relative (the host subtracts the eye position in
 // f64 before rounding to f32), so the camera sits at the origin and precision
@@ -17,8 +20,6 @@ override HAS_VERTEX_NORMALS: bool = true;
 override HAS_DIRECTIONAL: bool = true;
 override HAS_POINT: bool = true;
 override HAS_SPOT: bool = true;
-override HAS_PHONG: bool = true;
-override HAS_BLINN_PHONG: bool = true;
 override HAS_CHECKER: bool = true;
 // Kernel variants chosen by the user (render::KernelOptions).
 override USE_BVH: bool = true;
@@ -48,10 +49,11 @@ struct Globals {
     _pad2: u32,
 }
 
-// Mirrored by render::layout::PushConstants.
+// Mirrored by render::layout::PushConstants. One block for every stage
+// (shaders/stages/); each reads the members it needs.
 struct PushConstants {
-    // Pixel offset of this dispatch (tiling), and the image size in pixels
-    // (at most the uploaded image's; smaller for previews).
+    // Pixel offset of this dispatch (a band of the tile), and the image size
+    // in pixels (at most the uploaded image's; smaller for previews).
     origin: vec2<u32>,
     size: vec2<u32>,
     flags: u32,
@@ -64,6 +66,20 @@ struct PushConstants {
     // of the band of rows that one part of a split render holds
     // (`render --tile`), so that a tile needs a buffer of its own size only.
     slot_base: u32,
+    // The tile whose hit records and queue the stage buffers hold: its first
+    // pixel and its width (stages/records.wgsl).
+    tile_origin: vec2<u32>,
+    tile_width: u32,
+    // Shade stage: the shader program this dispatch runs.
+    program: u32,
+    // Light-sample queue: the first light sample of this chunk, and how many
+    // the queue holds per pixel (stages/records.wgsl).
+    sample_first: u32,
+    sample_count: u32,
+    // Lights in the scene (globals.num_lights; the shade stage sees no
+    // globals).
+    light_count: u32,
+    _pad0: u32,
 }
 
 const FLAG_WARM_UP: u32 = 1u;
@@ -71,59 +87,33 @@ const FLAG_WARM_UP: u32 = 1u;
 // pass of a sample split (`render --passes A..B`) that starts at A > 0.
 const FLAG_FRESH: u32 = 2u;
 
+// Farther than anything in a scene; used as "no hit yet" and as the length
+// of shadow rays towards directional lights.
+const FAR: f32 = 3.0e38;
+
 @group(0) @binding(0) var<uniform> globals: Globals;
-// Linear RGB; alpha is 1 where a primary ray hit something, else 0.
-@group(0) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
 // [0] primary rays, [1] shadow rays traced.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 2>;
 var<immediate> push: PushConstants;
 
-@compute @workgroup_size(8, 8, 1)
-fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
-    // Before any branch (see first_light).
-    first_light = lights[0];
-    // The warm-up dispatch makes the driver compile the kernel (lavapipe
-    // compiles at the first dispatch) without rendering anything.
-    if (push.flags & FLAG_WARM_UP) != 0u {
-        return;
-    }
-    let px = gid.xy + push.origin;
-    var shadow_rays = 0u;
-    var primary = 0u;
-    if px.x < push.size.x && px.y < push.size.y {
-        let pixel = px.y * push.size.x + px.x;
-        // One sample per pass: the pixel centre, or a stratified point in the
-        // pixel (box filter) when several samples per pixel are asked for.
-        var sub = vec2<f32>(0.5);
-        if PIXEL_JITTER {
-            sub = sample_2d(pixel, 0u, push.pass_index);
-        }
-        let ray = primary_ray(globals.camera, px, push.size, sub);
-        let hit = closest_hit(ray);
-        var colour = globals.background;
-        var alpha = 0.0;
-        if hit.found {
-            colour = shade(ray, hit, pixel, &shadow_rays);
-            alpha = 1.0;
-        }
-        if HAS_AOV && push.pass_index == 0u {
-            write_aov(pixel, hit);
-        }
-        var value = vec4<f32>(colour, alpha);
-        if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {
-            value += image[pixel - push.slot_base];
-        }
-        image[pixel - push.slot_base] = value;
-        primary = 1u;
-    }
-    // One global atomic per subgroup instead of one per pixel. (Summing
-    // per workgroup needs a barrier, and lavapipe then runs the whole kernel
-    // as coroutines: docs/bench.md §6 measures the difference.)
-    let subgroup_primary = subgroupAdd(primary);
-    let subgroup_shadow = subgroupAdd(shadow_rays);
+// The pixel of this invocation (its dispatch covers a band of the tile), and
+// whether it lies in the image.
+fn stage_pixel(gid: vec3<u32>) -> vec2<u32> {
+    return gid.xy + push.origin;
+}
+
+fn in_image(px: vec2<u32>) -> bool {
+    return px.x < push.size.x && px.y < push.size.y;
+}
+
+// Adds this invocation's `count` to counter `which` with one global atomic
+// per subgroup instead of one per invocation. (Summing per workgroup needs a
+// barrier, and lavapipe then runs the whole kernel as coroutines:
+// docs/bench.md §6 measures the difference.)
+fn count_rays(which: u32, count: u32) {
+    let total = subgroupAdd(count);
     // The first active lane of the subgroup (naga has no subgroupElect).
     if subgroupExclusiveAdd(1u) == 0u {
-        atomicAdd(&counters[0], subgroup_primary);
-        atomicAdd(&counters[1], subgroup_shadow);
+        atomicAdd(&counters[which], total);
     }
 }

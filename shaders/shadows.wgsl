@@ -1,4 +1,4 @@
-// Hard shadows: one shadow ray per light, with an any-hit early exit.
+// Hard shadows: one shadow ray per light sample, with an any-hit early exit.
 //
 // Self-intersection ("shadow acne") is avoided without an epsilon that thin
 // occluders could slip through:
@@ -26,9 +26,10 @@ fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return select(p_i, p + OFFSET_FLOAT_SCALE * n, abs(p) < vec3<f32>(OFFSET_ORIGIN));
 }
 
-// Whether anything blocks the light sampled by `ls` from the hit point.
-fn occluded(hit: Hit, ls: LightSample) -> bool {
-    // (shade() only asks for lights above the geometric surface.)
+// Whether anything blocks the light in unit direction `to_light` at
+// distance `t_max` from the hit point.
+fn occluded(hit: Hit, to_light: vec3<f32>, t_max: f32) -> bool {
+    // (The light stage queues only lights above the geometric surface.)
     // Only triangles need the offset (their neighbours): planes and spheres
     // never intersect themselves here, and an offset of many ulps of the
     // camera-relative position would shift their shadows, and let light leak
@@ -43,8 +44,7 @@ fn occluded(hit: Hit, ls: LightSample) -> bool {
     } else if hit.kind == KIND_TRIANGLE {
         origin = offset_ray_origin(hit.position, hit.geometric_normal);
     }
-    let ray = make_ray(origin, ls.to_light);
-    let t_max = ls.distance;
+    let ray = make_ray(origin, to_light);
     if HAS_PLANES {
         for (var i = 0u; i < globals.num_planes; i++) {
             if start.kind == KIND_PLANE && start.index == i {

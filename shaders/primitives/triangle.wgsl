@@ -40,11 +40,6 @@ fn triangle(i: u32) -> Triangle {
 @group(0) @binding(3) var triangles: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(4) var<storage, read> vertex_normals: array<VertexNormals>;
 
-// Which ray/triangle test the kernel uses (render::TriangleTest).
-const TRIANGLE_UV_FIRST: u32 = 0u;
-const TRIANGLE_T_FIRST: u32 = 1u;
-const TRIANGLE_WATERTIGHT: u32 = 2u;
-
 const TRIANGLE_MISS: vec3<f32> = vec3<f32>(-1.0, 0.0, 0.0);
 
 // Returns (t, u, v) with t > 0 for a hit nearer than t_max, else t = -1.

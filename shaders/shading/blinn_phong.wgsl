@@ -1,10 +1,31 @@
-// Blinn-Phong's specular lobe: max(0, h·n)^n_s with h = normalize(l + v).
-// The caller guarantees l·n > 0 (the specular term is zero otherwise).
-fn blinn_phong_lobe(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, shininess: f32) -> f32 {
-    let sum = l + v;
+// Blinn-Phong (Blinn 1977): Phong's terms with the half-vector lobe
+// max(0, h·n)^n_s, h = normalize(l + v). A shader file like any user's
+// (shading/interface.wgsl); the JSON type `blinn_phong` maps to it.
+
+struct Params {
+    ambient: vec3<f32>,
+    diffuse: vec3<f32>,
+    specular: vec3<f32>,
+    shininess: f32,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.ambient * light_ambient;
+}
+
+// The engine calls this only for samples with l·n > 0.
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    let ln = dot(l.to_light, s.normal);
+    let sum = l.to_light + s.to_eye;
     let len2 = dot(sum, sum);
-    if len2 == 0.0 {
-        return spec_pow(0.0, shininess);
+    // l = -v: no half vector; the lobe is 0^n_s (1 for n_s = 0).
+    var cos_h = 0.0;
+    if len2 > 0.0 {
+        cos_h = max(dot(sum * inverseSqrt(len2), s.normal), 0.0);
     }
-    return spec_pow(max(dot(sum * inverseSqrt(len2), n), 0.0), shininess);
+    var lobe = 1.0;
+    if p.shininess != 0.0 {
+        lobe = select(0.0, pow(cos_h, p.shininess), cos_h > 0.0);
+    }
+    return l.intensity * (p.diffuse * l.diffuse * ln + p.specular * l.specular * lobe);
 }

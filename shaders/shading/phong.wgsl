@@ -1,8 +1,25 @@
-// Phong's specular lobe: max(0, r·v)^n_s with r the mirror of l about n.
-// The caller guarantees l·n > 0 (the specular term is zero otherwise).
-fn phong_lobe(n: vec3<f32>, l: vec3<f32>, v: vec3<f32>, shininess: f32) -> f32 {
-    let r = 2.0 * dot(l, n) * n - l;
-    return spec_pow(max(dot(r, v), 0.0), shininess);
+// Phong (Phong 1975, in the seminar's form): for each light,
+//   k_a·I_a + [visible]·I·(k_d·I_d·max(0, l·n) + k_s·I_s·max(0, r·v)^n_s)
+// with r the mirror of l about n. A shader file like any user's
+// (shading/interface.wgsl); the JSON type `phong` maps to it.
+
+struct Params {
+    ambient: vec3<f32>,
+    diffuse: vec3<f32>,
+    specular: vec3<f32>,
+    shininess: f32,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.ambient * light_ambient;
+}
+
+// The engine calls this only for samples with l·n > 0.
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    let ln = dot(l.to_light, s.normal);
+    let r = 2.0 * ln * s.normal - l.to_light;
+    let lobe = spec_pow(max(dot(r, s.to_eye), 0.0), p.shininess);
+    return l.intensity * (p.diffuse * l.diffuse * ln + p.specular * l.specular * lobe);
 }
 
 // x^n with 0^0 = 1 (pow(0, 0) is undefined in WGSL/SPIR-V).

@@ -10,54 +10,8 @@ use std::path::{Path, PathBuf};
 
 use crate::scene::Features;
 
-/// The shader files in the order they are concatenated. WGSL module-scope
-/// declarations are order-independent; the order only fixes line numbers.
-pub const SHADER_FILES: &[&str] = &[
-    "render.wgsl",
-    "texels.wgsl",
-    "camera.wgsl",
-    "ray.wgsl",
-    "hit.wgsl",
-    "primitives/plane.wgsl",
-    "primitives/sphere.wgsl",
-    "primitives/triangle.wgsl",
-    "lights.wgsl",
-    "shading/shader.wgsl",
-    "shading/phong.wgsl",
-    "shading/blinn_phong.wgsl",
-    "shading/checker.wgsl",
-    "shadows.wgsl",
-    "bvh.wgsl",
-    "sampling.wgsl",
-    "queries.wgsl",
-    "aov.wgsl",
-];
+pub use super::stages::SHADER_FILES;
 
-/// The files built into the binary, so an installed `penumbra` needs no
-/// source tree.
-const EMBEDDED: &[&str] = &[
-    include_str!("../../shaders/render.wgsl"),
-    include_str!("../../shaders/texels.wgsl"),
-    include_str!("../../shaders/camera.wgsl"),
-    include_str!("../../shaders/ray.wgsl"),
-    include_str!("../../shaders/hit.wgsl"),
-    include_str!("../../shaders/primitives/plane.wgsl"),
-    include_str!("../../shaders/primitives/sphere.wgsl"),
-    include_str!("../../shaders/primitives/triangle.wgsl"),
-    include_str!("../../shaders/lights.wgsl"),
-    include_str!("../../shaders/shading/shader.wgsl"),
-    include_str!("../../shaders/shading/phong.wgsl"),
-    include_str!("../../shaders/shading/blinn_phong.wgsl"),
-    include_str!("../../shaders/shading/checker.wgsl"),
-    include_str!("../../shaders/shadows.wgsl"),
-    include_str!("../../shaders/bvh.wgsl"),
-    include_str!("../../shaders/sampling.wgsl"),
-    include_str!("../../shaders/queries.wgsl"),
-    include_str!("../../shaders/aov.wgsl"),
-];
-
-/// The compute kernel's entry point.
-pub const ENTRY_POINT: &str = "render";
 /// The ray-query kernel's entry point (`shaders/queries.wgsl`).
 pub const TRACE_ENTRY_POINT: &str = "trace";
 
@@ -98,40 +52,66 @@ impl fmt::Display for CompileError {
 impl std::error::Error for CompileError {}
 
 impl ShaderSource {
-    /// Reads and concatenates the shader files.
-    pub fn assemble(&self) -> Result<Assembled, CompileError> {
-        let mut text = String::new();
-        let mut files = Vec::new();
-        let mut line = 1u32;
-        for (i, name) in SHADER_FILES.iter().enumerate() {
-            let body = match self {
-                ShaderSource::Embedded => EMBEDDED[i].to_string(),
-                ShaderSource::Directory(dir) => {
-                    let path = dir.join(name);
-                    std::fs::read_to_string(&path).map_err(|e| CompileError {
-                        location: path.display().to_string(),
-                        message: format!("cannot read shader: {e}"),
-                    })?
-                }
-            };
-            let label = match self {
-                ShaderSource::Embedded => format!("shaders/{name}"),
-                ShaderSource::Directory(dir) => dir.join(name).display().to_string(),
-            };
-            // Each file starts on a fresh line, whether or not it ends in one.
-            text.push_str(&body);
-            if !body.ends_with('\n') {
-                text.push('\n');
+    /// Shader file `name` (relative to `shaders/`): its label for error
+    /// messages and its text.
+    pub fn read(&self, name: &str) -> Result<(String, String), CompileError> {
+        match self {
+            ShaderSource::Embedded => {
+                let text = super::stages::embedded(name).ok_or_else(|| CompileError {
+                    location: format!("shaders/{name}"),
+                    message: "no such shader file in the binary".into(),
+                })?;
+                Ok((format!("shaders/{name}"), text.to_string()))
             }
-            let lines = body.lines().count() as u32;
-            files.push((label, line, lines));
-            line += lines;
+            ShaderSource::Directory(dir) => {
+                let path = dir.join(name);
+                let text = std::fs::read_to_string(&path).map_err(|e| CompileError {
+                    location: path.display().to_string(),
+                    message: format!("cannot read shader: {e}"),
+                })?;
+                Ok((path.display().to_string(), text))
+            }
         }
-        Ok(Assembled { text, files })
+    }
+
+    /// Reads and concatenates the given shader files.
+    pub fn assemble_files(&self, names: &[&str]) -> Result<Assembled, CompileError> {
+        let mut out = Assembled {
+            text: String::new(),
+            files: Vec::new(),
+        };
+        for name in names {
+            let (label, body) = self.read(name)?;
+            out.push_file(label, &body);
+        }
+        Ok(out)
+    }
+
+    /// One module of every engine stage's files (the layout tests, tools and
+    /// the render identity read it).
+    pub fn assemble(&self) -> Result<Assembled, CompileError> {
+        self.assemble_files(&super::stages::engine_files())
+    }
+
+    /// The files stage `stage` is compiled from.
+    pub fn assemble_stage(&self, stage: super::stages::Stage) -> Result<Assembled, CompileError> {
+        self.assemble_files(&stage.files())
     }
 }
 
 impl Assembled {
+    /// Appends a file's text, labelled `label` in error messages. Each file
+    /// starts on a fresh line, whether or not the previous one ends in one.
+    pub fn push_file(&mut self, label: String, body: &str) {
+        let line = self.text.lines().count() as u32 + 1;
+        self.text.push_str(body);
+        if !body.ends_with('\n') {
+            self.text.push('\n');
+        }
+        let lines = body.lines().count() as u32;
+        self.files.push((label, line, lines));
+    }
+
     /// `file:line:col` for a 1-based line and column of the concatenation.
     fn locate(&self, line: u32, col: u32) -> String {
         for (name, start, count) in &self.files {
@@ -195,13 +175,33 @@ impl Assembled {
                 ) if !access.contains(naga::StorageAccess::STORE) => Some(B::TexelImage),
                 _ => None,
             };
-            let expected = if rb.group == 0 {
-                super::BINDINGS.get(rb.binding as usize).copied()
+            let info = if rb.group == 0 {
+                super::stages::BINDINGS.get(rb.binding as usize)
             } else {
                 None
             };
-            if declared.is_some() && declared == expected {
-                continue;
+            let expected = info.map(|i| i.ty);
+            // A stage may only read a buffer others write (same descriptor).
+            let fits = match (declared, expected) {
+                (Some(B::StorageReadOnly), Some(B::StorageReadWrite)) => true,
+                (d, e) => d.is_some() && d == e,
+            };
+            let name = var.name.as_deref().unwrap_or("?");
+            if fits {
+                // The variable's name says what it holds: the table's name,
+                // or the shade stage's prefixed one.
+                let want = info.map_or("", |i| i.name);
+                if name == want || name.strip_prefix("penumbra_") == Some(want) {
+                    continue;
+                }
+                let span = module.global_variables.get_span(handle);
+                return Err(self.error_at(
+                    span.location(&self.text).into(),
+                    format!(
+                        "`{name}` at @group(0) @binding({}) is where the renderer binds `{want}`",
+                        rb.binding
+                    ),
+                ));
             }
             let describe = |b: Option<B>| match b {
                 Some(B::Uniform) => "a uniform buffer (var<uniform>)",
@@ -210,7 +210,6 @@ impl Assembled {
                 Some(B::TexelImage) => "a texel image (texture_storage_2d<rgba32uint, read>)",
                 None => "nothing",
             };
-            let name = var.name.as_deref().unwrap_or("?");
             let what = if declared.is_some() {
                 describe(declared)
             } else {
@@ -232,15 +231,6 @@ impl Assembled {
     pub fn parse(&self) -> Result<naga::Module, CompileError> {
         naga::front::wgsl::parse_str(&self.text)
             .map_err(|e| self.error_at(e.location(&self.text), e.message().to_string()))
-    }
-
-    /// Compiles the kernel for `features` and `kernel` to SPIR-V 1.3 (Vulkan 1.1).
-    pub fn compile(
-        &self,
-        features: &Features,
-        kernel: &KernelOptions,
-    ) -> Result<Vec<u32>, CompileError> {
-        self.compile_entry(features, kernel, ENTRY_POINT)
     }
 
     /// Compiles entry point `entry` (the render kernel or the ray queries).
@@ -330,6 +320,14 @@ impl Assembled {
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
+        // Each stage declares only the overrides its files use; naga refuses
+        // values for any other.
+        constants.retain(|name, _| {
+            module
+                .overrides
+                .iter()
+                .any(|(_, o)| o.name.as_deref() == Some(name.as_str()))
+        });
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             &module,
             &info,
@@ -491,7 +489,7 @@ impl std::str::FromStr for TriangleTest {
 }
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 11] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -500,8 +498,6 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
         ("HAS_DIRECTIONAL", f.directional_lights),
         ("HAS_POINT", f.point_lights),
         ("HAS_SPOT", f.spot_lights),
-        ("HAS_PHONG", f.phong),
-        ("HAS_BLINN_PHONG", f.blinn_phong),
         ("HAS_CHECKER", f.checker),
         ("HAS_AREA_LIGHTS", f.area_lights),
         ("PIXEL_JITTER", f.pixel_jitter),
@@ -553,6 +549,16 @@ pub fn checkout_shader_dir() -> Option<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::stages::Stage;
+
+    /// Every stage of a frame compiled from one module; their words, joined.
+    fn compile(src: &Assembled, f: &Features, k: &KernelOptions) -> Result<Vec<u32>, CompileError> {
+        let mut words = Vec::new();
+        for stage in Stage::FRAME {
+            words.extend(src.compile_entry(f, k, stage.entry_point())?);
+        }
+        Ok(words)
+    }
 
     #[test]
     fn every_feature_set_compiles() {
@@ -584,10 +590,10 @@ mod tests {
                     shadow_offset: ShadowOffset::Fixed(1e-4),
                     ..Default::default()
                 };
-                let words = src.compile(&all, &kernel).unwrap();
+                let words = compile(&src, &all, &kernel).unwrap();
                 assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
                 assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
-                src.compile(&Features::default(), &kernel).unwrap();
+                compile(&src, &Features::default(), &kernel).unwrap();
             }
         }
     }
@@ -650,7 +656,7 @@ mod tests {
                 assert!(bad.text.contains(from), "{from}");
                 bad.text = bad.text.replace(from, to);
             }
-            let err = bad.compile(&f, &kernel).unwrap_err().to_string();
+            let err = compile(&bad, &f, &kernel).unwrap_err().to_string();
             for w in words {
                 assert!(err.contains(w), "{w:?} missing from: {err}");
             }
@@ -666,12 +672,12 @@ mod tests {
             phong: true,
             ..Default::default()
         };
-        let overrides = src.compile(&f, &KernelOptions::default()).unwrap();
+        let overrides = compile(&src, &f, &KernelOptions::default()).unwrap();
         let text = KernelOptions {
             text_specialise: true,
             ..Default::default()
         };
-        let text = src.compile(&f, &text).unwrap();
+        let text = compile(&src, &f, &text).unwrap();
         assert_eq!(text[0], 0x0723_0203);
         // naga keeps constant-condition branches either way: the dead code is
         // left to the driver's compiler (docs/bench.md measures the result).
@@ -707,8 +713,7 @@ mod tests {
         let broken = ShaderSource::Directory(dir.path().to_path_buf())
             .assemble()
             .unwrap();
-        let err = broken
-            .compile(&Features::default(), &KernelOptions::default())
+        let err = compile(&broken, &Features::default(), &KernelOptions::default())
             .unwrap_err();
         let want_line = include_str!("../../shaders/lights.wgsl")
             .lines()

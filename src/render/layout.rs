@@ -60,6 +60,13 @@ pub struct PushConstants {
     pub pass_index: u32,
     pub seed: u32,
     pub slot_base: u32,
+    pub tile_origin: [u32; 2],
+    pub tile_width: u32,
+    pub program: u32,
+    pub sample_first: u32,
+    pub sample_count: u32,
+    pub light_count: u32,
+    pub _pad0: u32,
 }
 
 /// `PushConstants::flags` bit: return at once (driver warm-up dispatch).
@@ -128,7 +135,7 @@ pub struct Light {
     pub specular: [f32; 3],
     pub radius: f32,
     pub edge1: [f32; 3],
-    pub _pad0: u32,
+    pub intensity: f32,
     pub edge2: [f32; 3],
     pub _pad1: u32,
 }
@@ -137,17 +144,37 @@ pub struct Light {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ShaderNode {
-    pub ambient: [f32; 3],
-    pub kind: u32,
-    pub diffuse: [f32; 3],
-    pub shininess: f32,
-    pub specular: [f32; 3],
-    pub inv_size: f32,
     pub cell_offset: [f32; 3],
+    pub inv_size: f32,
+    pub kind: u32,
     pub parity: u32,
     pub even: u32,
     pub odd: u32,
-    pub _pad: [u32; 2],
+    pub program: u32,
+    pub params: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// Mirrors `HitRecord` in `shaders/stages/records.wgsl` (and
+/// `penumbra_HitRecord` in `shaders/stages/shade.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct HitRecord {
+    pub position: [f32; 3],
+    pub t: f32,
+    pub geometric_normal: [f32; 3],
+    pub kind: u32,
+    pub shading_normal: [f32; 3],
+    pub index: u32,
+    pub to_eye: [f32; 3],
+    pub object: u32,
+    pub uv: [f32; 2],
+    pub bary: [f32; 2],
+    pub shader: u32,
+    pub program: u32,
+    pub params: u32,
+    pub _pad: u32,
 }
 
 /// Mirrors `BvhNode` in `shaders/bvh.wgsl`: an interior node's two
@@ -209,10 +236,9 @@ pub struct Aov {
 
 pub use crate::bvh::PRIM_SPHERE;
 
-/// Shader kinds, as in `shaders/shading/shader.wgsl`.
-pub const SHADER_PHONG: u32 = 0;
-/// Blinn-Phong shader kind.
-pub const SHADER_BLINN_PHONG: u32 = 1;
+/// Shader kinds, as in `shaders/shading/shader.wgsl`: a leaf (a shader
+/// file with its parameters).
+pub const SHADER_LEAF: u32 = 0;
 /// Checker shader kind.
 pub const SHADER_CHECKER: u32 = 2;
 /// Light kinds, as in `shaders/lights.wgsl`.
@@ -319,11 +345,11 @@ impl GpuScene {
             }
         }
         for l in &scene.lights {
-            let scale = |c: Vec3| c3(c * l.intensity);
             let mut gl = Light {
                 ambient: c3(l.ambient),
-                diffuse: scale(l.diffuse),
-                specular: scale(l.specular),
+                diffuse: c3(l.diffuse),
+                specular: c3(l.specular),
+                intensity: l.intensity,
                 samples: 1,
                 ..Default::default()
             };
@@ -376,20 +402,10 @@ impl GpuScene {
             }
             g.lights.push(gl);
         }
+        // Leaves get their program and parameters from the shade stage's
+        // materials (super::materials), which read the shader files.
         for sh in &scene.shaders {
             g.shaders.push(match sh {
-                Shader::Phong(p) | Shader::BlinnPhong(p) => ShaderNode {
-                    kind: if matches!(sh, Shader::Phong(_)) {
-                        SHADER_PHONG
-                    } else {
-                        SHADER_BLINN_PHONG
-                    },
-                    ambient: c3(p.ambient),
-                    diffuse: c3(p.diffuse),
-                    specular: c3(p.specular),
-                    shininess: p.shininess,
-                    ..Default::default()
-                },
                 Shader::Checker(c) => {
                     // Split the eye's position in cells into whole cells (whose
                     // parity we keep) and a fraction, in f64.
@@ -406,6 +422,10 @@ impl GpuScene {
                         ..Default::default()
                     }
                 }
+                _ => ShaderNode {
+                    kind: SHADER_LEAF,
+                    ..Default::default()
+                },
             });
         }
         g.globals = Globals {
@@ -554,7 +574,41 @@ mod tests {
             layout!(
                 "PushConstants",
                 PushConstants,
-                [origin, size, flags, pass_index, seed, slot_base]
+                [
+                    origin,
+                    size,
+                    flags,
+                    pass_index,
+                    seed,
+                    slot_base,
+                    tile_origin,
+                    tile_width,
+                    program,
+                    sample_first,
+                    sample_count,
+                    light_count,
+                    _pad0
+                ]
+            ),
+            layout!(
+                "HitRecord",
+                HitRecord,
+                [
+                    position,
+                    t,
+                    geometric_normal,
+                    kind,
+                    shading_normal,
+                    index,
+                    to_eye,
+                    object,
+                    uv,
+                    bary,
+                    shader,
+                    program,
+                    params,
+                    _pad
+                ]
             ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
@@ -575,7 +629,7 @@ mod tests {
                     specular,
                     radius,
                     edge1,
-                    _pad0,
+                    intensity,
                     edge2,
                     _pad1
                 ]
@@ -584,17 +638,16 @@ mod tests {
                 "ShaderNode",
                 ShaderNode,
                 [
-                    ambient,
-                    kind,
-                    diffuse,
-                    shininess,
-                    specular,
-                    inv_size,
                     cell_offset,
+                    inv_size,
+                    kind,
                     parity,
                     even,
                     odd,
-                    _pad
+                    program,
+                    params,
+                    _pad0,
+                    _pad1
                 ]
             ),
         ]
@@ -631,6 +684,39 @@ mod tests {
         }
     }
 
+    /// The shade stage's prefixed mirrors (`shaders/stages/shade.wgsl`)
+    /// have the host's layouts too.
+    #[test]
+    fn shade_stage_mirrors_match_the_host() {
+        use crate::render::shade::{assemble, read_program, ProgramFile};
+        use crate::render::ShaderSource;
+        let file = ProgramFile::Builtin("shading/phong.wgsl");
+        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+        let source = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
+        let module = source.assembled.parse().unwrap();
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let layouts = host_layouts();
+        for name in ["HitRecord", "Light", "PushConstants"] {
+            let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
+            let prefixed = format!("penumbra_{name}");
+            let (_, ty) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(prefixed.as_str()))
+                .unwrap_or_else(|| panic!("{prefixed} not in shade.wgsl"));
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                panic!("{prefixed} is not a struct");
+            };
+            assert_eq!(*span as usize, *size, "{prefixed}: size");
+            let wgsl: Vec<(&str, usize)> = members
+                .iter()
+                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
+                .collect();
+            assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
+        }
+    }
+
     /// Every constant the host and the kernel both use has the same value
     /// in both (the WGSL `const`s, read back through naga).
     #[test]
@@ -648,8 +734,7 @@ mod tests {
             ("NO_NORMALS", NO_NORMALS),
             ("FLAG_WARM_UP", FLAG_WARM_UP),
             ("FLAG_FRESH", FLAG_FRESH),
-            ("SHADER_PHONG", SHADER_PHONG),
-            ("SHADER_BLINN_PHONG", SHADER_BLINN_PHONG),
+            ("SHADER_LEAF", SHADER_LEAF),
             ("SHADER_CHECKER", SHADER_CHECKER),
             ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
             ("LIGHT_POINT", LIGHT_POINT),

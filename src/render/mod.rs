@@ -1,11 +1,14 @@
 //! The renderer: lays a scene out for the GPU, compiles (and caches) the
-//! kernel specialised to the scene's features, dispatches it once per frame
-//! and reads the image back.
+//! stages of a frame ([`stages`]) specialised to the scene's features, runs
+//! them tile by tile ([`tiles`]) and reads the image back.
 
 pub mod compile;
 pub mod layout;
 pub mod quantised_bvh;
 mod reload;
+pub mod shade;
+pub mod stages;
+pub mod tiles;
 mod trace;
 
 use std::collections::HashMap;
@@ -16,12 +19,16 @@ use bytemuck::Zeroable;
 use crate::scene::{Features, Scene};
 use crate::vulkan::{
     BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
-    DeviceSelector, Resource, TexelImage, VulkanError,
+    DeviceSelector, Dispatch, Resource, TexelImage, VulkanError,
 };
 pub use compile::{
     Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
 };
 use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_WARM_UP};
+pub use reload::ReloadReport;
+use shade::{Materials, ProgramFile};
+use stages::{Binding, Stage};
+use tiles::TilePlan;
 pub use trace::{HitKind, TraceHit, TraceRay};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
@@ -29,24 +36,6 @@ const TILE: u32 = 8;
 /// Rows per dispatch of [`Renderer::render_cancellable`] (a multiple of
 /// `TILE`, so bands never overlap).
 const BAND_ROWS: u32 = 8 * TILE;
-
-/// Binding types of set 0, in binding order (see `shaders/`).
-const BINDINGS: [BindingType; 14] = [
-    BindingType::Uniform,          // 0 globals
-    BindingType::StorageReadOnly,  // 1 planes
-    BindingType::StorageReadOnly,  // 2 spheres
-    BindingType::TexelImage,       // 3 triangles
-    BindingType::StorageReadOnly,  // 4 vertex normals
-    BindingType::StorageReadOnly,  // 5 lights
-    BindingType::StorageReadOnly,  // 6 shader nodes
-    BindingType::StorageReadWrite, // 7 image
-    BindingType::StorageReadWrite, // 8 counters
-    BindingType::TexelImage,       // 9 BVH nodes
-    BindingType::StorageReadOnly,  // 10 BVH primitive references
-    BindingType::StorageReadOnly,  // 11 query rays (ray queries only)
-    BindingType::StorageReadWrite, // 12 query hits (ray queries only)
-    BindingType::StorageReadWrite, // 13 AOVs (when asked for)
-];
 
 /// How to set up a [`Renderer`].
 #[derive(Clone, Debug, Default)]
@@ -264,7 +253,7 @@ impl Aovs {
     }
 }
 
-/// What an uploaded scene binds at one binding (as [`BINDINGS`] says).
+/// What an uploaded scene binds at one binding (as [`stages::BINDINGS`] says).
 enum Bound {
     Buffer(Buffer),
     Image(TexelImage),
@@ -278,7 +267,7 @@ impl Bound {
         }
     }
 
-    /// The buffer, for the bindings [`BINDINGS`] declares as buffers.
+    /// The buffer, for the bindings [`stages::BINDINGS`] declares as buffers.
     fn buffer(&self) -> Result<&Buffer, RenderError> {
         match self {
             Bound::Buffer(b) => Ok(b),
@@ -292,8 +281,22 @@ impl Bound {
 
 /// A scene laid out and uploaded to the device, ready to render.
 pub struct UploadedScene {
-    /// One per binding of [`BINDINGS`], in order.
+    /// One per binding of [`stages::BINDINGS`], in order (the tile's stage
+    /// buffers are placeholders, replaced per render).
     bound: Vec<Bound>,
+    /// Tells uploads apart (hit records are reused only for the same one).
+    id: u64,
+    /// The scene's shaders, to rebuild the materials after a shader edit.
+    shaders: Vec<crate::scene::Shader>,
+    /// Shade programs and parameters.
+    materials: Materials,
+    /// Bumped whenever the materials are rebuilt.
+    materials_generation: u64,
+    /// Light samples per pixel and pass, over all lights.
+    light_samples: u32,
+    /// Lights (the host uploads a placeholder for a scene without any,
+    /// which no stage may count).
+    light_count: u32,
     features: Features,
     kernel: KernelOptions,
     /// The camera position the geometry is relative to.
@@ -310,6 +313,12 @@ pub struct UploadedScene {
 }
 
 impl UploadedScene {
+    /// Lights the stages loop over (the host uploads a placeholder light
+    /// for a scene without any, which no stage may count).
+    fn light_count(&self) -> u32 {
+        self.light_count
+    }
+
     /// The scene's full image size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -326,15 +335,80 @@ impl UploadedScene {
     }
 }
 
+/// A compiled pipeline and the hash of the source it was compiled from.
+struct Cached {
+    pipeline: ComputePipeline,
+    hash: u64,
+}
+
+/// Which hit records (and light-sample visibility) the stage buffers hold:
+/// everything a shading edit leaves unchanged.
+#[derive(Clone, Debug, PartialEq)]
+struct HitKey {
+    upload: u64,
+    materials: u64,
+    traversal: u64,
+    size: [u32; 2],
+    rows: std::ops::Range<u32>,
+    pass_index: u32,
+    seed: u32,
+    features: Features,
+    kernel: KernelOptions,
+}
+
+/// The stage buffers of one tile plan, and whose hits they hold.
+struct StageBuffers {
+    plan: TilePlan,
+    hits: Buffer,
+    queue_rays: Buffer,
+    queue_falloff: Buffer,
+    radiance: Buffer,
+    holds: Option<HitKey>,
+}
+
+/// Stage buffers kept for hit reuse: the preview's and the full image's.
+const KEPT_STAGE_BUFFERS: usize = 2;
+
 /// Renders scenes on one Vulkan device. Create it once and call
-/// [`Renderer::render`] per scene: kernels are cached by feature set.
+/// [`Renderer::render`] per scene: stages are cached by feature set and by
+/// the text of their shader files.
 pub struct Renderer {
-    // Field order matters: pipelines must drop before the context.
-    pipelines: HashMap<(Features, KernelOptions), ComputePipeline>,
-    trace_pipelines: HashMap<(Features, KernelOptions), ComputePipeline>,
+    // Field order matters: pipelines and buffers must drop before the context.
+    stage_pipelines: HashMap<(Stage, Features, KernelOptions), Cached>,
+    shade_pipelines: HashMap<ProgramFile, Cached>,
+    stage_buffers: Vec<StageBuffers>,
+    /// Bumped when a stage before shading is recompiled (stale hits).
+    traversal_generation: u64,
+    uploads: u64,
+    stage_memory: u64,
     shaders: ShaderSource,
     kernel: KernelOptions,
     context: Context,
+}
+
+/// Compile times of the pipelines built for a frame, and their names.
+#[derive(Clone, Debug, Default)]
+struct Compiled {
+    naga: Duration,
+    pipeline: Duration,
+    driver: Duration,
+    names: Vec<String>,
+}
+
+impl Compiled {
+    fn add(&mut self, other: Compiled) {
+        self.naga += other.naga;
+        self.pipeline += other.pipeline;
+        self.driver += other.driver;
+        self.names.extend(other.names);
+    }
+}
+
+fn text_hash(parts: &[&str]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    parts.hash(&mut h);
+    h.finish()
 }
 
 impl Renderer {
@@ -345,12 +419,31 @@ impl Renderer {
             validation: opts.validation,
         })?;
         Ok(Renderer {
-            pipelines: HashMap::new(),
-            trace_pipelines: HashMap::new(),
+            stage_pipelines: HashMap::new(),
+            shade_pipelines: HashMap::new(),
+            stage_buffers: Vec::new(),
+            traversal_generation: 0,
+            uploads: 0,
+            stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             shaders: opts.shaders.clone(),
             kernel: opts.kernel,
             context,
         })
+    }
+
+    /// The bound on one tile's stage memory (hit records, colour sums and
+    /// queued light samples), in bytes ([`tiles::DEFAULT_STAGE_MEMORY`]
+    /// unless set).
+    pub fn stage_memory(&self) -> u64 {
+        self.stage_memory
+    }
+
+    /// Sets the bound on one tile's stage memory (at least
+    /// [`tiles::MIN_STAGE_MEMORY`]); a lower bound means more, smaller tiles
+    /// and the same image.
+    pub fn set_stage_memory(&mut self, bytes: u64) {
+        self.stage_memory = bytes.max(tiles::MIN_STAGE_MEMORY);
+        self.stage_buffers.clear();
     }
 
     /// The device in use.
@@ -383,35 +476,32 @@ impl Renderer {
         self.kernel = kernel;
     }
 
-    /// Forgets compiled kernels (after a shader edit).
+    /// Forgets compiled pipelines and kept hit records.
     pub fn clear_pipeline_cache(&mut self) {
-        self.pipelines.clear();
-        self.trace_pipelines.clear();
+        self.stage_pipelines.clear();
+        self.shade_pipelines.clear();
+        self.stage_buffers.clear();
     }
 
-    /// Compiles the kernel for `features` unless cached; returns the time of
-    /// (naga, pipeline creation, driver compile).
-    fn pipeline(
-        &mut self,
-        features: Features,
-    ) -> Result<(Duration, Duration, Duration), RenderError> {
-        let key = (features, self.kernel);
-        if self.pipelines.contains_key(&key) {
-            return Ok(Default::default());
-        }
-        let t0 = Instant::now();
-        let spirv = self.shaders.assemble()?.compile(&features, &self.kernel)?;
+    /// Creates a pipeline from `spirv` and makes the driver compile it now
+    /// with an empty dispatch (lavapipe compiles at the first dispatch), so
+    /// that render phases measure rendering only. Returns it and the times
+    /// of pipeline creation and of the driver's compile.
+    fn build_pipeline(
+        &self,
+        spirv: &[u32],
+        entry: &str,
+    ) -> Result<(ComputePipeline, Duration, Duration), RenderError> {
         let t1 = Instant::now();
+        let types = stages::binding_types();
         let pipeline = self.context.create_compute_pipeline(
-            &spirv,
-            compile::ENTRY_POINT,
-            &BINDINGS,
+            spirv,
+            entry,
+            &types,
             std::mem::size_of::<PushConstants>() as u32,
         )?;
         let t2 = Instant::now();
-        // Warm-up: an empty dispatch makes lavapipe compile the kernel now,
-        // so the render phase measures rendering only.
-        let dummies: Vec<_> = BINDINGS
+        let dummies: Vec<_> = types
             .iter()
             .map(|b| {
                 let ctx = &self.context;
@@ -433,9 +523,127 @@ impl Renderer {
         };
         self.context
             .dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
-        let t3 = Instant::now();
-        self.pipelines.insert(key, pipeline);
-        Ok((t1 - t0, t2 - t1, t3 - t2))
+        Ok((pipeline, t2 - t1, t2.elapsed()))
+    }
+
+    /// Compiles engine stage `stage` for `features` and `kernel` unless the
+    /// cache has it; with `reload`, also when its files' text changed since.
+    fn stage_pipeline(
+        &mut self,
+        stage: Stage,
+        features: Features,
+        kernel: KernelOptions,
+        reload: bool,
+    ) -> Result<Compiled, RenderError> {
+        let key = (stage, features, kernel);
+        if !reload && self.stage_pipelines.contains_key(&key) {
+            return Ok(Compiled::default());
+        }
+        let t0 = Instant::now();
+        let assembled = self.shaders.assemble_stage(stage)?;
+        let hash = text_hash(&[&assembled.text]);
+        if self.stage_pipelines.get(&key).is_some_and(|c| c.hash == hash) {
+            return Ok(Compiled::default());
+        }
+        let spirv = assembled.compile_entry(&features, &kernel, stage.entry_point())?;
+        let naga = t0.elapsed();
+        let (pipeline, creation, driver) = self.build_pipeline(&spirv, stage.entry_point())?;
+        if stage != Stage::Gather && stage != Stage::Trace {
+            self.traversal_generation += 1;
+        }
+        self.stage_pipelines.insert(key, Cached { pipeline, hash });
+        Ok(Compiled {
+            naga,
+            pipeline: creation,
+            driver,
+            names: vec![stage.name().to_string()],
+        })
+    }
+
+    /// Compiles the shade pipeline of `program` unless the cache holds one
+    /// compiled from the same text.
+    fn shade_pipeline(&mut self, program: &shade::Program) -> Result<Compiled, RenderError> {
+        let t0 = Instant::now();
+        let source = shade::assemble(&self.shaders, &program.file, &program.text)?;
+        if source.fields != program.fields {
+            return Err(RenderError::Compile(CompileError {
+                location: program.file.label(),
+                message: "its Params changed since the scene was loaded".into(),
+            }));
+        }
+        let hash = text_hash(&[&source.assembled.text]);
+        if self
+            .shade_pipelines
+            .get(&program.file)
+            .is_some_and(|c| c.hash == hash)
+        {
+            return Ok(Compiled::default());
+        }
+        let spirv = source.assembled.compile_entry(
+            &Features::default(),
+            &KernelOptions::default(),
+            shade::SHADE_ENTRY_POINT,
+        )?;
+        let naga = t0.elapsed();
+        let (pipeline, creation, driver) = self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT)?;
+        self.shade_pipelines
+            .insert(program.file.clone(), Cached { pipeline, hash });
+        Ok(Compiled {
+            naga,
+            pipeline: creation,
+            driver,
+            names: vec![format!("shade {}", program.file.label())],
+        })
+    }
+
+    /// Every pipeline a frame of `scene` needs, compiled unless cached (with
+    /// `reload`: recompiled where the files' text changed).
+    fn frame_pipelines(
+        &mut self,
+        scene: &UploadedScene,
+        features: Features,
+        kernel: KernelOptions,
+        reload: bool,
+    ) -> Result<Compiled, RenderError> {
+        let mut done = Compiled::default();
+        for stage in Stage::FRAME {
+            done.add(self.stage_pipeline(stage, features, kernel, reload)?);
+        }
+        for program in &scene.materials.programs {
+            if reload || !self.shade_pipelines.contains_key(&program.file) {
+                done.add(self.shade_pipeline(program)?);
+            }
+        }
+        Ok(done)
+    }
+
+    /// The index of kept stage buffers for `plan`, allocating them (and
+    /// dropping the least recently used) when none fit.
+    fn stage_buffers_for(&mut self, plan: TilePlan) -> Result<usize, RenderError> {
+        if let Some(i) = self.stage_buffers.iter().position(|b| b.plan == plan) {
+            // Most recently used last.
+            let b = self.stage_buffers.remove(i);
+            self.stage_buffers.push(b);
+            return Ok(self.stage_buffers.len() - 1);
+        }
+        if self.stage_buffers.len() >= KEPT_STAGE_BUFFERS {
+            self.stage_buffers.remove(0);
+        }
+        let ctx = &self.context;
+        let px = plan.pixels();
+        let entries = px * plan.chunk as u64;
+        let storage = |label: &str, bytes: u64| {
+            ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16))
+        };
+        self.stage_buffers.push(StageBuffers {
+            plan,
+            hits: storage("hit records", px * tiles::HIT_RECORD_BYTES)?,
+            queue_rays: storage("queued rays", entries * 16)?,
+            queue_falloff: storage("queued falloff", entries * 4)?,
+            radiance: storage("colour sums", px * tiles::RADIANCE_BYTES)?,
+            holds: None,
+        });
+        Ok(self.stage_buffers.len() - 1)
     }
 
     /// Checks the image against the device's limits, naming the scene field.
@@ -499,6 +707,11 @@ impl Renderer {
         self.check_size(1, height)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
+        let shaders = self.shaders.clone();
+        let materials = Materials::new(&scene.shaders, &shaders, &mut |f| {
+            shade::read_program(&shaders, f)
+        })?;
+        set_leaves(&mut gpu.shaders, &materials);
         let layout = t0.elapsed();
         let t_bvh = Instant::now();
         if self.kernel.accel == Accel::Bvh {
@@ -552,10 +765,17 @@ impl Renderer {
             b(ctx.create_buffer("query hits", BufferUsage::Storage, 16)?),
             // AOV buffer: a placeholder, replaced when AOVs are asked for.
             b(ctx.create_buffer("AOVs", BufferUsage::Storage, 16)?),
+            // The tile's stage buffers: placeholders, replaced per render.
+            b(ctx.create_buffer("hit records", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("queued rays", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("queued falloff", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("colour sums", BufferUsage::Storage, 16)?),
+            b(params_buffer(ctx, &materials)?),
         ];
+        debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds
         // an empty one, which the BVH's memory does not count).
-        let bvh_bytes = match &bound[9] {
+        let bvh_bytes = match &bound[Binding::BvhNodes as usize] {
             Bound::Image(image) if !gpu.bvh_nodes.is_empty() => image.size() as usize,
             _ => 0,
         } + std::mem::size_of_val(gpu.bvh_prims.as_slice());
@@ -575,8 +795,16 @@ impl Renderer {
                 Some(next - n)
             })
             .collect();
+        self.uploads += 1;
+        let light_samples = gpu.lights.iter().map(|l| l.samples).sum();
         Ok(UploadedScene {
             bound,
+            id: self.uploads,
+            shaders: scene.shaders.clone(),
+            materials,
+            materials_generation: 0,
+            light_samples,
+            light_count: gpu.lights.len() as u32,
             features: scene.features(),
             kernel: self.kernel,
             eye: scene.camera.position,
@@ -713,10 +941,7 @@ impl Renderer {
             accel: scene.kernel.accel,
             ..self.kernel
         };
-        let saved = std::mem::replace(&mut self.kernel, key_kernel);
-        let compiled = self.pipeline(features);
-        self.kernel = saved;
-        let (shader_compile, pipeline_creation, driver_compile) = compiled?;
+        let compiled = self.frame_pipelines(scene, features, key_kernel, false)?;
         let ctx = &self.context;
         let aov_buffer = if with_aovs {
             let bytes = width as u64 * height as u64 * std::mem::size_of::<layout::Aov>() as u64;
@@ -746,30 +971,64 @@ impl Renderer {
             None => None,
         };
         let full = width as u64 * height as u64 * 16;
-        if part.is_none() && scene.bound[7].buffer()?.size() < full {
+        if part.is_none() && scene.bound[Binding::Image as usize].buffer()?.size() < full {
             return Err(RenderError::Scene {
                 field: "camera.width/camera.height".into(),
                 message: "the scene was uploaded for parts only (Renderer::upload_for_parts): render it with render_part".into(),
             });
         }
-        let mut refs: Vec<_> = scene.bound.iter().map(Bound::resource).collect();
-        if let Some(b) = &aov_buffer {
-            refs[13] = b.into();
-        }
-        if let Some(b) = &band_buffer {
-            refs[7] = b.into();
-        }
-        let pipeline = &self.pipelines[&(features, key_kernel)];
         let rows = part.map_or(0..height, |p| p.rows.clone());
         let (first_pass, end_pass) =
             part.map_or((0, sampling.spp), |p| (p.passes.start, p.passes.end));
-        let groups = [
-            width.div_ceil(TILE),
-            (rows.end - rows.start).div_ceil(TILE),
-            1,
-        ];
+        let plan = TilePlan::new(
+            [width, rows.end - rows.start],
+            scene.light_samples,
+            self.stage_memory,
+            self.context.limits().max_storage_buffer_range,
+        );
+        let kept = self.stage_buffers_for(plan)?;
+        let tiles = plan.tiles(width, rows.clone());
+        let chunks = plan.chunks();
+        // Hit records survive a shading edit: with one tile and one chunk,
+        // the buffers still hold this exact frame's hits and visibility.
+        let reusable = tiles.len() == 1 && chunks.len() == 1 && end_pass - first_pass == 1;
+        let key = |pass_index: u32| HitKey {
+            upload: scene.id,
+            materials: scene.materials_generation,
+            traversal: self.traversal_generation,
+            size: [width, height],
+            rows: rows.clone(),
+            pass_index,
+            seed: sampling.seed,
+            features,
+            kernel: key_kernel,
+        };
+        let reuse = reusable && self.stage_buffers[kept].holds.as_ref() == Some(&key(first_pass));
+        let holds = (reusable).then(|| key(first_pass));
+        // Until this render completes, the buffers hold no whole frame.
+        self.stage_buffers[kept].holds = None;
+        let ctx = &self.context;
+        let buffers = &self.stage_buffers[kept];
+        let mut refs: Vec<_> = scene.bound.iter().map(Bound::resource).collect();
+        if let Some(b) = &aov_buffer {
+            refs[Binding::Aovs as usize] = b.into();
+        }
+        if let Some(b) = &band_buffer {
+            refs[Binding::Image as usize] = b.into();
+        }
+        refs[Binding::HitRecords as usize] = (&buffers.hits).into();
+        refs[Binding::QueueRays as usize] = (&buffers.queue_rays).into();
+        refs[Binding::QueueFalloff as usize] = (&buffers.queue_falloff).into();
+        refs[Binding::Radiance as usize] = (&buffers.radiance).into();
+        let stage = |s: Stage| &self.stage_pipelines[&(s, features, key_kernel)].pipeline;
+        let programs: Vec<&ComputePipeline> = scene
+            .materials
+            .programs
+            .iter()
+            .map(|p| &self.shade_pipelines[&p.file].pipeline)
+            .collect();
         let read_counters = || -> Result<[u32; 2], RenderError> {
-            let bytes = ctx.read_buffer(scene.bound[8].buffer()?)?;
+            let bytes = ctx.read_buffer(scene.bound[Binding::Counters as usize].buffer()?)?;
             Ok([0, 1].map(|i| {
                 u32::from_le_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap_or_default())
             }))
@@ -780,33 +1039,73 @@ impl Renderer {
         let mut render = Duration::ZERO;
         let start = Instant::now();
         let mut passes = 0;
+        let light_count = scene.light_count();
         while first_pass + passes < end_pass {
-            let push = PushConstants {
-                origin: [0, rows.start],
+            let base = PushConstants {
                 size: [width, height],
                 pass_index: first_pass + passes,
                 seed: sampling.seed,
                 flags: if passes == 0 { FLAG_FRESH } else { 0 },
                 slot_base: rows.start * width,
+                light_count,
+                ..Zeroable::zeroed()
             };
-            match cancel.as_mut() {
-                None => {
-                    render += ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?
-                }
-                Some(cancel) => {
-                    for y0 in (0..height).step_by(BAND_ROWS as usize) {
+            for &(origin, size) in &tiles {
+                // Bands of rows within the tile, to ask `cancel` between.
+                let band_rows = match cancel {
+                    Some(_) => BAND_ROWS,
+                    None => size[1],
+                };
+                for y0 in (origin[1]..origin[1] + size[1]).step_by(band_rows as usize) {
+                    if let Some(cancel) = cancel.as_mut() {
                         if cancel() {
                             return Ok(None);
                         }
-                        let band = PushConstants {
-                            origin: [0, y0],
-                            ..push
-                        };
-                        let rows = BAND_ROWS.min(height - y0);
-                        let groups = [groups[0], rows.div_ceil(TILE), 1];
-                        render +=
-                            ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&band), groups)?;
                     }
+                    let rows_here = band_rows.min(origin[1] + size[1] - y0);
+                    let groups = [size[0].div_ceil(TILE), rows_here.div_ceil(TILE), 1];
+                    let band = PushConstants {
+                        origin: [origin[0], y0],
+                        tile_origin: origin,
+                        tile_width: plan.tile[0],
+                        ..base
+                    };
+                    let mut pushes: Vec<(&ComputePipeline, PushConstants)> = Vec::new();
+                    if !reuse {
+                        pushes.push((stage(Stage::Hit), band));
+                        pushes.push((stage(Stage::Resolve), band));
+                    }
+                    for &(first, count) in &chunks {
+                        let chunk = PushConstants {
+                            sample_first: first,
+                            sample_count: count,
+                            ..band
+                        };
+                        if !reuse {
+                            pushes.push((stage(Stage::Lights), chunk));
+                            pushes.push((stage(Stage::Shadow), chunk));
+                        }
+                        for (i, p) in programs.iter().enumerate() {
+                            pushes.push((
+                                p,
+                                PushConstants {
+                                    program: i as u32,
+                                    ..chunk
+                                },
+                            ));
+                        }
+                    }
+                    pushes.push((stage(Stage::Gather), band));
+                    let chain: Vec<Dispatch> = pushes
+                        .iter()
+                        .map(|(pipeline, push)| Dispatch {
+                            pipeline,
+                            resources: &refs,
+                            push_constants: bytemuck::bytes_of(push),
+                            groups,
+                        })
+                        .collect();
+                    render += ctx.dispatch_chain(&chain)?;
                 }
             }
             let after = read_counters()?;
@@ -824,11 +1123,14 @@ impl Renderer {
                 break;
             }
         }
+        let holds = holds.filter(|_| passes == 1);
+        let (shader_compile, pipeline_creation, driver_compile) =
+            (compiled.naga, compiled.pipeline, compiled.driver);
 
         let t1 = Instant::now();
         let image_bytes = match &band_buffer {
             Some(b) => ctx.read_buffer(b)?,
-            None => ctx.read_buffer(scene.bound[7].buffer()?)?,
+            None => ctx.read_buffer(scene.bound[Binding::Image as usize].buffer()?)?,
         };
         let n = width as usize * height as usize;
         let mut pixels: Vec<[f32; 4]> = match part {
@@ -850,6 +1152,7 @@ impl Renderer {
         };
         let readback = t1.elapsed();
         ctx.check_validation()?;
+        self.stage_buffers[kept].holds = holds;
 
         Ok(Some((
             Frame {
@@ -914,4 +1217,25 @@ impl Renderer {
         frame.stats.timings.upload = uploaded.upload;
         Ok(frame)
     }
+}
+
+/// Fills in each leaf node's program and first parameter word.
+fn set_leaves(nodes: &mut [layout::ShaderNode], materials: &Materials) {
+    for (node, leaf) in nodes.iter_mut().zip(&materials.leaves) {
+        if let Some((program, params)) = leaf {
+            node.program = *program;
+            node.params = *params;
+        }
+    }
+}
+
+/// The parameter words' buffer (never empty: a binding needs a buffer).
+fn params_buffer(ctx: &Context, materials: &Materials) -> Result<Buffer, VulkanError> {
+    let mut words = materials.words.clone();
+    words.resize(words.len().max(4), 0);
+    ctx.create_buffer_with_data(
+        "shader parameters",
+        BufferUsage::Storage,
+        bytemuck::cast_slice(&words),
+    )
 }

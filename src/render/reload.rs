@@ -1,31 +1,65 @@
-//! Shader hot reload (`penumbra watch`): recompile the kernel after a shader
-//! edit without losing the last good one when the edit does not compile.
+//! Shader hot reload (`penumbra watch`): recompile only the pipelines whose
+//! shader files changed, without losing the last good ones when an edit
+//! does not compile.
 
 use std::time::Duration;
 
-use super::{KernelOptions, RenderError, Renderer, UploadedScene};
+use super::shade::{read_program, Materials};
+use super::{CompileError, KernelOptions, RenderError, Renderer, UploadedScene};
+
+/// What a reload recompiled and what it cost.
+#[derive(Clone, Debug, Default)]
+pub struct ReloadReport {
+    /// The pipelines recompiled: engine stages by name (`hit`, `shadow`, …),
+    /// shade pipelines as `shade <file>`. Empty when nothing changed.
+    pub recompiled: Vec<String>,
+    /// naga: WGSL to SPIR-V.
+    pub shader_compile: Duration,
+    /// vkCreateComputePipelines.
+    pub pipeline_creation: Duration,
+    /// The driver's compile at the first (warm-up) dispatch.
+    pub driver_compile: Duration,
+}
 
 impl Renderer {
-    /// Recompiles the kernel for `scene` from the current shader files (call
-    /// it after a shader edit; the scene upload is kept). On success the new
-    /// kernel replaces every cached one and the time of (naga, pipeline
-    /// creation, driver compile) is returned; on failure the cache keeps the
-    /// last good kernels, so the next render still works.
+    /// Re-reads the shader files after an edit and recompiles the pipelines
+    /// `scene` needs whose files changed (the scene upload is kept; hit
+    /// records are kept too when only shade pipelines changed). On failure
+    /// the pipelines that failed keep their last good versions, so the next
+    /// render still works.
     pub fn reload_shaders(
         &mut self,
-        scene: &UploadedScene,
-    ) -> Result<(Duration, Duration, Duration), RenderError> {
-        let old = std::mem::take(&mut self.pipelines);
+        scene: &mut UploadedScene,
+    ) -> Result<ReloadReport, RenderError> {
         let kernel = KernelOptions {
             accel: scene.kernel.accel,
             ..self.kernel
         };
-        let saved = std::mem::replace(&mut self.kernel, kernel);
-        let compiled = self.pipeline(scene.features);
-        self.kernel = saved;
-        if compiled.is_err() {
-            self.pipelines = old;
+        // The shader files' texts (and Params) as they are now.
+        let source = self.shaders.clone();
+        let materials = Materials::new(&scene.shaders, &source, &mut |f| read_program(&source, f))?;
+        // The parameter words were uploaded for the Params the files had.
+        for (new, old) in materials.programs.iter().zip(&scene.materials.programs) {
+            if new.fields != old.fields {
+                return Err(RenderError::Compile(CompileError {
+                    location: new.file.label(),
+                    message: "its Params changed since the scene was loaded: save the scene file to reload it".into(),
+                }));
+            }
         }
-        compiled
+        let old = std::mem::replace(&mut scene.materials, materials);
+        let compiled = self.frame_pipelines(scene, scene.features, kernel, true);
+        match compiled {
+            Ok(c) => Ok(ReloadReport {
+                recompiled: c.names,
+                shader_compile: c.naga,
+                pipeline_creation: c.pipeline,
+                driver_compile: c.driver,
+            }),
+            Err(e) => {
+                scene.materials = old;
+                Err(e)
+            }
+        }
     }
 }

@@ -6,9 +6,9 @@
 use bytemuck::Zeroable;
 use glam::DVec3;
 
-use super::compile::TRACE_ENTRY_POINT;
 use super::layout::{PushConstants, QueryHit, QueryRay};
-use super::{BufferUsage, RenderError, Renderer, UploadedScene, BINDINGS};
+use super::stages::{Binding, Stage};
+use super::{BufferUsage, RenderError, Renderer, UploadedScene};
 
 /// Rays per dispatch: 64 per workgroup, within every device's 65,535
 /// workgroups.
@@ -60,27 +60,13 @@ impl Renderer {
         scene: &UploadedScene,
         rays: &[TraceRay],
     ) -> Result<Vec<Option<TraceHit>>, RenderError> {
-        let key = (
-            scene.features,
-            super::KernelOptions {
-                accel: scene.kernel.accel,
-                ..self.kernel
-            },
-        );
-        if !self.trace_pipelines.contains_key(&key) {
-            let spirv =
-                self.shaders
-                    .assemble()?
-                    .compile_entry(&key.0, &key.1, TRACE_ENTRY_POINT)?;
-            let pipeline = self.context.create_compute_pipeline(
-                &spirv,
-                TRACE_ENTRY_POINT,
-                &BINDINGS,
-                std::mem::size_of::<PushConstants>() as u32,
-            )?;
-            self.trace_pipelines.insert(key, pipeline);
-        }
-        let pipeline = &self.trace_pipelines[&key];
+        let features = scene.features;
+        let kernel = super::KernelOptions {
+            accel: scene.kernel.accel,
+            ..self.kernel
+        };
+        self.stage_pipeline(Stage::Trace, features, kernel, false)?;
+        let pipeline = &self.stage_pipelines[&(Stage::Trace, features, kernel)].pipeline;
         let ctx = &self.context;
         let mut out = Vec::with_capacity(rays.len());
         for chunk in rays.chunks(RAYS_PER_DISPATCH) {
@@ -103,8 +89,8 @@ impl Renderer {
                 (chunk.len() * 32) as u64,
             )?;
             let mut refs: Vec<_> = scene.bound.iter().map(super::Bound::resource).collect();
-            refs[11] = (&ray_buf).into();
-            refs[12] = (&hit_buf).into();
+            refs[Binding::QueryRays as usize] = (&ray_buf).into();
+            refs[Binding::QueryHits as usize] = (&hit_buf).into();
             let push = PushConstants {
                 size: [chunk.len() as u32, 1],
                 ..Zeroable::zeroed()

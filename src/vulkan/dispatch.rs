@@ -70,6 +70,30 @@ impl Resource<'_> {
     }
 }
 
+/// One dispatch of a chain ([`Context::dispatch_chain`]).
+#[derive(Clone, Copy)]
+pub struct Dispatch<'a> {
+    /// The pipeline.
+    pub pipeline: &'a ComputePipeline,
+    /// `resources[i]` is bound at binding `i` of set 0.
+    pub resources: &'a [Resource<'a>],
+    /// Push constants (as many bytes as the pipeline takes).
+    pub push_constants: &'a [u8],
+    /// Workgroups.
+    pub groups: [u32; 3],
+}
+
+impl Resource<'_> {
+    /// The Vulkan handle bound, to tell whether two dispatches bind the same.
+    fn handle(&self) -> u64 {
+        use ash::vk::Handle;
+        match self {
+            Resource::Buffer(b) => b.handle.as_raw(),
+            Resource::Image(i) => i.view.as_raw(),
+        }
+    }
+}
+
 impl Context {
     /// Binds `resources[i]` at binding `i` of set 0 (must match the pipeline's bindings in number
     /// and type), pushes `push_constants` (len == the pipeline's push_constant_size), dispatches
@@ -82,63 +106,109 @@ impl Context {
         push_constants: &[u8],
         groups: [u32; 3],
     ) -> Result<Duration, VulkanError> {
-        self.check_dispatch(pipeline, resources, push_constants, groups)?;
-        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
+        self.dispatch_chain(&[Dispatch {
+            pipeline,
+            resources,
+            push_constants,
+            groups,
+        }])
+    }
+
+    /// Records `chain` into one command buffer, in order, with a memory barrier after each
+    /// dispatch (each sees the writes of those before it), submits it and waits. A pipeline that
+    /// appears more than once must bind the same resources each time (its one descriptor set is
+    /// written once). Returns the wall time from submit to fence signalled.
+    pub fn dispatch_chain(&self, chain: &[Dispatch]) -> Result<Duration, VulkanError> {
+        let mut written: Vec<(vk::DescriptorSet, Vec<u64>)> = Vec::new();
+        for d in chain {
+            self.check_dispatch(d.pipeline, d.resources, d.push_constants, d.groups)?;
+            let handles: Vec<u64> = d.resources.iter().map(Resource::handle).collect();
+            match written.iter().find(|(set, _)| *set == d.pipeline.set) {
+                Some((_, h)) if *h != handles => {
+                    return Err(VulkanError::InvalidArgument(
+                        "a pipeline appears twice in one dispatch chain with different resources"
+                            .into(),
+                    ))
+                }
+                Some(_) => {}
+                None => written.push((d.pipeline.set, handles)),
+            }
+        }
+        let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = Vec::new();
+        let mut image_infos: Vec<[vk::DescriptorImageInfo; 1]> = Vec::new();
+        let mut updates: Vec<(vk::DescriptorSet, u32, vk::DescriptorType, bool, usize)> = Vec::new();
+        let mut seen: Vec<vk::DescriptorSet> = Vec::new();
+        for d in chain {
+            if seen.contains(&d.pipeline.set) {
+                continue;
+            }
+            seen.push(d.pipeline.set);
+            for (i, (binding, resource)) in d.pipeline.bindings.iter().zip(d.resources).enumerate()
+            {
+                let (is_buffer, at) = match resource {
+                    Resource::Buffer(b) => {
+                        buffer_infos.push([vk::DescriptorBufferInfo::default()
+                            .buffer(b.handle)
+                            .range(vk::WHOLE_SIZE)]);
+                        (true, buffer_infos.len() - 1)
+                    }
+                    Resource::Image(img) => {
+                        image_infos.push([vk::DescriptorImageInfo::default()
+                            .image_view(img.view)
+                            .image_layout(vk::ImageLayout::GENERAL)]);
+                        (false, image_infos.len() - 1)
+                    }
+                };
+                updates.push((
+                    d.pipeline.set,
+                    i as u32,
+                    binding.descriptor_type(),
+                    is_buffer,
+                    at,
+                ));
+            }
+        }
+        let writes: Vec<_> = updates
             .iter()
-            .map(|r| match r {
-                Resource::Buffer(b) => [vk::DescriptorBufferInfo::default()
-                    .buffer(b.handle)
-                    .range(vk::WHOLE_SIZE)],
-                Resource::Image(_) => [vk::DescriptorBufferInfo::default()],
-            })
-            .collect();
-        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
-            .iter()
-            .map(|r| match r {
-                Resource::Image(i) => [vk::DescriptorImageInfo::default()
-                    .image_view(i.view)
-                    .image_layout(vk::ImageLayout::GENERAL)],
-                Resource::Buffer(_) => [vk::DescriptorImageInfo::default()],
-            })
-            .collect();
-        let writes: Vec<_> = pipeline
-            .bindings
-            .iter()
-            .zip(resources)
-            .enumerate()
-            .map(|(i, (binding, resource))| {
+            .map(|&(set, binding, ty, is_buffer, at)| {
                 let write = vk::WriteDescriptorSet::default()
-                    .dst_set(pipeline.set)
-                    .dst_binding(i as u32)
-                    .descriptor_type(binding.descriptor_type());
-                match resource {
-                    Resource::Buffer(_) => write.buffer_info(&buffer_infos[i]),
-                    Resource::Image(_) => write.image_info(&image_infos[i]),
+                    .dst_set(set)
+                    .dst_binding(binding)
+                    .descriptor_type(ty);
+                if is_buffer {
+                    write.buffer_info(&buffer_infos[at])
+                } else {
+                    write.image_info(&image_infos[at])
                 }
             })
             .collect();
-        // SAFETY: everything was checked above; the set is updated under the submit lock, while
-        // no earlier dispatch can still be using it (each one is waited for).
+        // SAFETY: everything was checked above; the sets are updated under the submit lock, while
+        // no earlier dispatch can still be using them (each submission is waited for).
         self.submit(|device, cmd| unsafe {
-            let bind = vk::PipelineBindPoint::COMPUTE;
             if !writes.is_empty() {
                 device.update_descriptor_sets(&writes, &[]);
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    bind,
-                    pipeline.layout,
-                    0,
-                    &[pipeline.set],
-                    &[],
-                );
             }
-            device.cmd_bind_pipeline(cmd, bind, pipeline.pipeline);
-            if !push_constants.is_empty() {
-                let stage = vk::ShaderStageFlags::COMPUTE;
-                device.cmd_push_constants(cmd, pipeline.layout, stage, 0, push_constants);
+            let bind = vk::PipelineBindPoint::COMPUTE;
+            for d in chain {
+                let pipeline = d.pipeline;
+                if !pipeline.bindings.is_empty() {
+                    device.cmd_bind_descriptor_sets(
+                        cmd,
+                        bind,
+                        pipeline.layout,
+                        0,
+                        &[pipeline.set],
+                        &[],
+                    );
+                }
+                device.cmd_bind_pipeline(cmd, bind, pipeline.pipeline);
+                if !d.push_constants.is_empty() {
+                    let stage = vk::ShaderStageFlags::COMPUTE;
+                    device.cmd_push_constants(cmd, pipeline.layout, stage, 0, d.push_constants);
+                }
+                device.cmd_dispatch(cmd, d.groups[0], d.groups[1], d.groups[2]);
+                memory_barrier(device, cmd, vk::PipelineStageFlags::COMPUTE_SHADER);
             }
-            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
-            memory_barrier(device, cmd, vk::PipelineStageFlags::COMPUTE_SHADER);
         })
     }
 

@@ -13,7 +13,7 @@ mod pipeline;
 
 pub use buffer::{Buffer, BufferUsage};
 pub use context::{Context, ContextOptions, DeviceInfo, DeviceLimits, DeviceSelector};
-pub use dispatch::Resource;
+pub use dispatch::{Dispatch, Resource};
 pub use image::{TexelImage, TEXEL_BYTES, TEXEL_ROW};
 pub use pipeline::{BindingType, ComputePipeline};
 

@@ -187,7 +187,10 @@ pub fn run(
     let mut session = Session::new(renderer, &scene_path, opts.load.clone());
 
     let shader_files: Vec<PathBuf> = match &shader_dir {
-        Some(d) => SHADER_FILES.iter().map(|f| normalise(&d.join(f))).collect(),
+        Some(d) => SHADER_FILES
+            .iter()
+            .map(|(f, _)| normalise(&d.join(f)))
+            .collect(),
         None => Vec::new(),
     };
     let watch_set = |scene_files: &[PathBuf]| WatchSet {
@@ -316,13 +319,13 @@ pub fn run(
             format!("{} ({})", kinds.join("+"), names.join(", "))
         };
         let mut parts = vec![format!("reload {number}: {what}")];
-        let compile = applied.compile.or_else(|| {
+        let compile = applied.compile.clone().or_else(|| {
             stages
                 .iter()
-                .map(|s| s.compile)
+                .map(|s| s.compile.clone())
                 .find(|c| c.total() > Duration::ZERO)
         });
-        if let Some(c) = compile {
+        if let Some(c) = &compile {
             parts.push(format!(
                 "compile {} (naga {}, pipeline {}, driver {})",
                 ms(c.total()),

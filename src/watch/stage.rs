@@ -24,7 +24,7 @@ pub struct Changes {
 
 /// Kernel compile times: naga (WGSL to SPIR-V), pipeline creation, and the
 /// driver's own compile at the first dispatch.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct CompileTimes {
     /// naga.
     pub naga: Duration,
@@ -32,6 +32,9 @@ pub struct CompileTimes {
     pub pipeline: Duration,
     /// lavapipe's compile to machine code.
     pub driver: Duration,
+    /// The pipelines recompiled ([`crate::render::ReloadReport::recompiled`]):
+    /// a shading edit recompiles only its file's shade pipeline.
+    pub recompiled: Vec<String>,
 }
 
 impl CompileTimes {
@@ -130,14 +133,15 @@ impl Session {
             out.errors.extend(self.scene_error.clone());
         }
         if changes.shaders {
-            match &self.uploaded {
+            match &mut self.uploaded {
                 Some(up) => match self.renderer.reload_shaders(up) {
-                    Ok((naga, pipeline, driver)) => {
+                    Ok(report) => {
                         self.shader_error = None;
                         out.compile = Some(CompileTimes {
-                            naga,
-                            pipeline,
-                            driver,
+                            naga: report.shader_compile,
+                            pipeline: report.pipeline_creation,
+                            driver: report.driver_compile,
+                            recompiled: report.recompiled,
                         });
                         out.render = true;
                     }
@@ -197,6 +201,7 @@ impl Session {
                         naga: t.shader_compile,
                         pipeline: t.pipeline_creation,
                         driver: t.driver_compile,
+                        recompiled: Vec::new(),
                     };
                     if c.total() > Duration::ZERO {
                         // A kernel compiled from the files on disk: they are good.

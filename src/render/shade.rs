@@ -1,0 +1,400 @@
+//! The shade stage: one compute pipeline per shader file.
+//!
+//! A shade pipeline is compiled from `shaders/shading/interface.wgsl` (the
+//! engine types `Surface` and `LightSample`), `shaders/stages/shade.wgsl`
+//! (the stage, all of whose names start with `penumbra_`), the shader file,
+//! and two functions generated here from the file's `struct Params`: the
+//! loader that reads a material's parameters from the packed parameter words,
+//! and the call of the optional `ambient`. Built-in shaders (Phong,
+//! Blinn-Phong) are such files too, so built-in and user shaders share one
+//! mechanism.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use super::compile::{Assembled, CompileError, ShaderSource};
+use super::stages::SHADE_PRELUDE;
+
+/// The shade stage's entry point (`shaders/stages/shade.wgsl`).
+pub const SHADE_ENTRY_POINT: &str = "penumbra_shade_stage";
+
+/// The type of one `Params` field, as the packed parameter words hold it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ParamKind {
+    /// `f32`: one word, its bits.
+    F32,
+    /// `i32`: one word.
+    I32,
+    /// `u32`: one word.
+    U32,
+    /// `vecN<f32>` (N = 2, 3, 4): N words.
+    Vec(u8),
+}
+
+impl ParamKind {
+    /// Words the field takes.
+    pub fn words(self) -> u32 {
+        match self {
+            ParamKind::Vec(n) => n as u32,
+            _ => 1,
+        }
+    }
+
+    /// The WGSL type.
+    pub fn wgsl(self) -> String {
+        match self {
+            ParamKind::F32 => "f32".into(),
+            ParamKind::I32 => "i32".into(),
+            ParamKind::U32 => "u32".into(),
+            ParamKind::Vec(n) => format!("vec{n}<f32>"),
+        }
+    }
+}
+
+/// Where a shade program's file comes from.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ProgramFile {
+    /// A built-in shader file, relative to `shaders/` (read through the
+    /// renderer's [`ShaderSource`], so shader development edits it).
+    Builtin(&'static str),
+    /// A user's shader file (the scene refers to it).
+    User(PathBuf),
+}
+
+impl ProgramFile {
+    /// The name reload reports and errors use.
+    pub fn label(&self) -> String {
+        match self {
+            ProgramFile::Builtin(name) => format!("shaders/{name}"),
+            ProgramFile::User(path) => path.display().to_string(),
+        }
+    }
+}
+
+/// A shade program's assembled source and what it declares.
+pub struct ShadeSource {
+    /// Prelude, shader file and generated functions.
+    pub assembled: Assembled,
+    /// The `Params` fields, in declaration order (empty: none).
+    pub fields: Vec<(String, ParamKind)>,
+    /// Whether the file defines `ambient`.
+    pub has_ambient: bool,
+}
+
+/// Reads the text of `file`: built-ins through `source`, user files from
+/// disk.
+pub fn read_program(source: &ShaderSource, file: &ProgramFile) -> Result<String, CompileError> {
+    match file {
+        ProgramFile::Builtin(name) => source.read(name).map(|(_, text)| text),
+        ProgramFile::User(path) => std::fs::read_to_string(path).map_err(|e| CompileError {
+            location: path.display().to_string(),
+            message: format!("cannot read shader: {e}"),
+        }),
+    }
+}
+
+/// Assembles the shade program of `file` whose text is `text`.
+pub fn assemble(
+    source: &ShaderSource,
+    file: &ProgramFile,
+    text: &str,
+) -> Result<ShadeSource, CompileError> {
+    let mut assembled = source.assemble_files(SHADE_PRELUDE)?;
+    assembled.push_file(file.label(), text);
+    // What the file declares, from a parse of prelude and file (plus a
+    // placeholder Params if it has none, which `shade` still takes). When
+    // both parses fail, the error of the file as written is the one to show.
+    let parse = |a: &Assembled| {
+        crate::panics::catch(|| a.parse()).unwrap_or_else(|panic| {
+            Err(CompileError {
+                location: file.label(),
+                message: format!("internal error in naga ({panic}); please report this shader"),
+            })
+        })
+    };
+    let mut declared = source.assemble_files(&SHADE_PRELUDE[..1])?;
+    declared.push_file(file.label(), text);
+    let module = match parse(&declared) {
+        Ok(m) => m,
+        Err(first) => {
+            let mut probe = declared.clone();
+            probe.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
+            parse(&probe).map_err(|_| first)?
+        }
+    };
+    let placeholder = find_struct(&module, "Params").is_some_and(|(_, members)| {
+        members.len() == 1 && members[0].name.as_deref() == Some("penumbra_unused")
+    });
+    let fields = if placeholder {
+        assembled.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
+        Vec::new()
+    } else {
+        params_fields(&module, &file.label())?
+    };
+    let has_ambient = module
+        .functions
+        .iter()
+        .any(|(_, f)| f.name.as_deref() == Some("ambient"));
+    assembled.push_file(
+        format!("(penumbra's parameter loader for {})", file.label()),
+        &generated(&fields, has_ambient, placeholder),
+    );
+    Ok(ShadeSource {
+        assembled,
+        fields,
+        has_ambient,
+    })
+}
+
+/// `Params` for a shader file that declares none.
+const PLACEHOLDER_PARAMS: &str = "struct Params {\n    penumbra_unused: u32,\n}\n";
+
+fn find_struct<'m>(module: &'m naga::Module, name: &str) -> Option<(naga::Handle<naga::Type>, &'m [naga::StructMember])> {
+    module.types.iter().find_map(|(h, t)| match &t.inner {
+        naga::TypeInner::Struct { members, .. } if t.name.as_deref() == Some(name) => {
+            Some((h, members.as_slice()))
+        }
+        _ => None,
+    })
+}
+
+/// The fields of `struct Params`, each an `f32`, `i32`, `u32` or
+/// `vec2`–`vec4<f32>`.
+fn params_fields(
+    module: &naga::Module,
+    label: &str,
+) -> Result<Vec<(String, ParamKind)>, CompileError> {
+    let Some((_, members)) = find_struct(module, "Params") else {
+        return Ok(Vec::new());
+    };
+    members
+        .iter()
+        .map(|m| {
+            use naga::{ScalarKind as K, TypeInner as T};
+            let name = m.name.clone().unwrap_or_default();
+            let kind = match &module.types[m.ty].inner {
+                T::Scalar(s) if s.width == 4 && s.kind == K::Float => Some(ParamKind::F32),
+                T::Scalar(s) if s.width == 4 && s.kind == K::Sint => Some(ParamKind::I32),
+                T::Scalar(s) if s.width == 4 && s.kind == K::Uint => Some(ParamKind::U32),
+                T::Vector { size, scalar } if scalar.width == 4 && scalar.kind == K::Float => {
+                    Some(ParamKind::Vec(*size as u8))
+                }
+                _ => None,
+            };
+            kind.map(|k| (name.clone(), k)).ok_or_else(|| CompileError {
+                location: label.to_string(),
+                message: format!(
+                    "Params field `{name}` has a type penumbra cannot fill from a scene: use f32, i32, u32 or vec2/vec3/vec4<f32>"
+                ),
+            })
+        })
+        .collect()
+}
+
+/// The loader of `Params` from the packed words, and the ambient call.
+fn generated(fields: &[(String, ParamKind)], has_ambient: bool, placeholder: bool) -> String {
+    let mut out = String::new();
+    let mut at = 0u32;
+    let mut args = Vec::new();
+    let word = |i: u32| format!("penumbra_params[at + {i}u]");
+    for (_, kind) in fields {
+        args.push(match kind {
+            ParamKind::F32 => format!("bitcast<f32>({})", word(at)),
+            ParamKind::I32 => format!("bitcast<i32>({})", word(at)),
+            ParamKind::U32 => word(at),
+            ParamKind::Vec(n) => {
+                let parts: Vec<String> = (0..*n as u32)
+                    .map(|i| format!("bitcast<f32>({})", word(at + i)))
+                    .collect();
+                format!("vec{n}<f32>({})", parts.join(", "))
+            }
+        });
+        at += kind.words();
+    }
+    if placeholder {
+        args.push("0u".into());
+    }
+    let _ = writeln!(
+        out,
+        "fn penumbra_load_params(at: u32) -> Params {{\n    return Params({});\n}}",
+        args.join(", ")
+    );
+    let body = if has_ambient {
+        "ambient(s, light_ambient, p)"
+    } else {
+        "vec3<f32>(0.0)"
+    };
+    let _ = writeln!(
+        out,
+        "fn penumbra_ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {{\n    return {body};\n}}"
+    );
+    out
+}
+
+/// The parameter words of a built-in Phong-type shader, in the order of the
+/// file's `Params` fields (the JSON types `phong` and `blinn_phong` map to
+/// these files and keep their fields).
+pub fn phong_words(
+    fields: &[(String, ParamKind)],
+    p: &crate::scene::Phong,
+    label: &str,
+) -> Result<Vec<u32>, CompileError> {
+    let mut words = Vec::new();
+    for (name, kind) in fields {
+        let value: Vec<f32> = match (name.as_str(), kind) {
+            ("ambient", ParamKind::Vec(3)) => p.ambient.to_array().to_vec(),
+            ("diffuse", ParamKind::Vec(3)) => p.diffuse.to_array().to_vec(),
+            ("specular", ParamKind::Vec(3)) => p.specular.to_array().to_vec(),
+            ("shininess", ParamKind::F32) => vec![p.shininess],
+            _ => {
+                return Err(CompileError {
+                    location: label.to_string(),
+                    message: format!(
+                        "Params field `{name}: {}` is not one of the built-in shader's fields (ambient, diffuse, specular: vec3<f32>; shininess: f32)",
+                        kind.wgsl()
+                    ),
+                })
+            }
+        };
+        words.extend(value.iter().map(|v| v.to_bits()));
+    }
+    Ok(words)
+}
+
+/// One shade program: a shader file, its text, and its `Params` fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Program {
+    /// The file.
+    pub file: ProgramFile,
+    /// Its text as last read.
+    pub text: String,
+    /// Its `Params` fields.
+    pub fields: Vec<(String, ParamKind)>,
+}
+
+/// The shade programs of a scene and every leaf shader's parameters.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Materials {
+    /// One per distinct shader file, in order of first use.
+    pub programs: Vec<Program>,
+    /// Every leaf's parameter words, one after the other.
+    pub words: Vec<u32>,
+    /// Per scene shader: (program, first parameter word) of a leaf, `None`
+    /// for a checker.
+    pub leaves: Vec<Option<(u32, u32)>>,
+}
+
+impl Materials {
+    /// The programs and parameters of `shaders`, reading the built-in files
+    /// through `source`. `text_of` gives a program's text (from disk on a
+    /// reload; else as first read).
+    pub fn new(
+        shaders: &[crate::scene::Shader],
+        source: &ShaderSource,
+        text_of: &mut dyn FnMut(&ProgramFile) -> Result<String, CompileError>,
+    ) -> Result<Materials, CompileError> {
+        use crate::scene::Shader;
+        let mut m = Materials::default();
+        for sh in shaders {
+            let file = match sh {
+                Shader::Phong(_) => ProgramFile::Builtin("shading/phong.wgsl"),
+                Shader::BlinnPhong(_) => ProgramFile::Builtin("shading/blinn_phong.wgsl"),
+                Shader::Checker(_) => {
+                    m.leaves.push(None);
+                    continue;
+                }
+            };
+            let program = match m.programs.iter().position(|p| p.file == file) {
+                Some(i) => i,
+                None => {
+                    let text = text_of(&file)?;
+                    let fields = assemble(source, &file, &text)?.fields;
+                    m.programs.push(Program {
+                        file: file.clone(),
+                        text,
+                        fields,
+                    });
+                    m.programs.len() - 1
+                }
+            };
+            let label = file.label();
+            let words = match sh {
+                Shader::Phong(p) | Shader::BlinnPhong(p) => {
+                    phong_words(&m.programs[program].fields, p, &label)?
+                }
+                Shader::Checker(_) => Vec::new(),
+            };
+            m.leaves.push(Some((program as u32, m.words.len() as u32)));
+            m.words.extend(words);
+        }
+        Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_assemble_with_the_phong_fields() {
+        for name in ["shading/phong.wgsl", "shading/blinn_phong.wgsl"] {
+            let file = ProgramFile::Builtin(name);
+            let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+            let s = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
+            let names: Vec<_> = s.fields.iter().map(|(n, k)| (n.as_str(), *k)).collect();
+            assert_eq!(
+                names,
+                [
+                    ("ambient", ParamKind::Vec(3)),
+                    ("diffuse", ParamKind::Vec(3)),
+                    ("specular", ParamKind::Vec(3)),
+                    ("shininess", ParamKind::F32)
+                ]
+            );
+            assert!(s.has_ambient);
+            let words = s
+                .assembled
+                .compile_entry(
+                    &Default::default(),
+                    &Default::default(),
+                    SHADE_ENTRY_POINT,
+                )
+                .unwrap();
+            assert_eq!(words[0], 0x0723_0203);
+        }
+    }
+
+    #[test]
+    fn a_file_without_params_gets_the_placeholder() {
+        let file = ProgramFile::User("normals.wgsl".into());
+        let text = "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    return 0.5 * s.normal + 0.5;\n}\n";
+        let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
+        assert!(s.fields.is_empty() && !s.has_ambient);
+        s.assembled
+            .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
+            .unwrap();
+    }
+
+    #[test]
+    fn packs_every_kind_in_field_order() {
+        let file = ProgramFile::User("toon.wgsl".into());
+        let text = "struct Params { a: f32, b: i32, c: u32, d: vec2<f32>, e: vec4<f32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    return vec3<f32>(p.a + f32(p.b) + f32(p.c) + p.d.x + p.e.w);\n}\n";
+        let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
+        let kinds: Vec<_> = s.fields.iter().map(|(_, k)| *k).collect();
+        assert_eq!(
+            kinds,
+            [
+                ParamKind::F32,
+                ParamKind::I32,
+                ParamKind::U32,
+                ParamKind::Vec(2),
+                ParamKind::Vec(4)
+            ]
+        );
+        let loader = s.assembled.text.rsplit("fn penumbra_load_params").next().unwrap();
+        assert!(loader.contains("vec4<f32>(bitcast<f32>(penumbra_params[at + 5u])"), "{loader}");
+        s.assembled
+            .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
+            .unwrap();
+    }
+}

@@ -1,0 +1,117 @@
+//! Tiles: the stages pass hit records and queued light samples through
+//! buffers sized for one tile of the image, so that an image of any size,
+//! with any number of light samples, renders within a fixed memory bound.
+//!
+//! A tile is a rectangle of whole 8×8 workgroups. Its stage memory is
+//! `pixels × (hit record + colour sum + samples per chunk × queue entry)`;
+//! when a pixel has more light samples than a chunk holds, the light,
+//! shadow and shade stages run once per chunk of samples.
+
+/// Bytes of one hit record (`layout::HitRecord`).
+pub const HIT_RECORD_BYTES: u64 = 96;
+/// Bytes of one pixel's colour sum.
+pub const RADIANCE_BYTES: u64 = 16;
+/// Bytes of one queued light sample: direction and distance, and falloff.
+pub const QUEUE_ENTRY_BYTES: u64 = 20;
+/// Most light samples per pixel one chunk holds.
+pub const MAX_CHUNK: u32 = 64;
+/// The default bound on a tile's stage memory: 128 MiB.
+pub const DEFAULT_STAGE_MEMORY: u64 = 128 << 20;
+/// The smallest bound a renderer accepts: one 8×8 tile with a full chunk.
+pub const MIN_STAGE_MEMORY: u64 =
+    64 * (HIT_RECORD_BYTES + RADIANCE_BYTES + MAX_CHUNK as u64 * QUEUE_ENTRY_BYTES);
+
+/// How a render's image is cut into tiles and its light samples into chunks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TilePlan {
+    /// Tile width and height in pixels (multiples of 8).
+    pub tile: [u32; 2],
+    /// Light samples per pixel and pass, over all lights.
+    pub samples: u32,
+    /// Samples per chunk (the queue holds this many per pixel; at least 1).
+    pub chunk: u32,
+}
+
+impl TilePlan {
+    /// Plans tiles for an image region of `size` pixels with `samples`
+    /// light samples per pixel, within `bound` bytes of stage memory and
+    /// buffers of at most `max_buffer` bytes each.
+    pub fn new(size: [u32; 2], samples: u32, bound: u64, max_buffer: u64) -> TilePlan {
+        let chunk = samples.clamp(1, MAX_CHUNK);
+        let per_pixel = HIT_RECORD_BYTES + RADIANCE_BYTES + chunk as u64 * QUEUE_ENTRY_BYTES;
+        let largest = (HIT_RECORD_BYTES).max(chunk as u64 * 16);
+        let pixels = (bound.max(MIN_STAGE_MEMORY) / per_pixel)
+            .min(max_buffer / largest)
+            .max(64);
+        let align = |v: u64| (v.div_ceil(8) * 8) as u32;
+        let down = |v: u64| ((v / 8).max(1) * 8) as u32;
+        let width = align(size[0] as u64).min(down(pixels / 8));
+        let height = align(size[1] as u64).min(down(pixels / width as u64));
+        TilePlan {
+            tile: [width, height],
+            samples,
+            chunk,
+        }
+    }
+
+    /// Pixels of one tile.
+    pub fn pixels(&self) -> u64 {
+        self.tile[0] as u64 * self.tile[1] as u64
+    }
+
+    /// Bytes of stage memory the plan's buffers take.
+    pub fn bytes(&self) -> u64 {
+        self.pixels()
+            * (HIT_RECORD_BYTES + RADIANCE_BYTES + self.chunk as u64 * QUEUE_ENTRY_BYTES)
+    }
+
+    /// The sample chunks: (first sample, samples in the chunk); one empty
+    /// chunk when there are no light samples (the shade stage still runs).
+    pub fn chunks(&self) -> Vec<(u32, u32)> {
+        if self.samples == 0 {
+            return vec![(0, 0)];
+        }
+        (0..self.samples)
+            .step_by(self.chunk as usize)
+            .map(|first| (first, self.chunk.min(self.samples - first)))
+            .collect()
+    }
+
+    /// The tiles covering columns `0..width` and rows `rows`: (origin, size)
+    /// of each, in row-major order; edge tiles are smaller.
+    pub fn tiles(&self, width: u32, rows: std::ops::Range<u32>) -> Vec<([u32; 2], [u32; 2])> {
+        let mut out = Vec::new();
+        for y in (rows.start..rows.end).step_by(self.tile[1] as usize) {
+            for x in (0..width).step_by(self.tile[0] as usize) {
+                let w = self.tile[0].min(width - x);
+                let h = self.tile[1].min(rows.end - y);
+                out.push(([x, y], [w, h]));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_images_are_one_tile_and_the_bound_holds() {
+        let p = TilePlan::new([640, 360], 3, DEFAULT_STAGE_MEMORY, 128 << 20);
+        assert_eq!(p.tiles(640, 0..360).len(), 1);
+        assert_eq!(p.chunks(), vec![(0, 3)]);
+        for (size, samples) in [([16384, 16384], 1), ([4096, 4096], 256), ([1, 9000], 1000)] {
+            for bound in [MIN_STAGE_MEMORY, 1 << 20, DEFAULT_STAGE_MEMORY] {
+                let p = TilePlan::new(size, samples, bound, 128 << 20);
+                assert!(p.bytes() <= bound, "{size:?} {samples} {bound}: {}", p.bytes());
+                assert!(p.tile[0] % 8 == 0 && p.tile[1] % 8 == 0);
+                let tiles = p.tiles(size[0], 0..size[1]);
+                let covered: u64 = tiles.iter().map(|(_, s)| s[0] as u64 * s[1] as u64).sum();
+                assert_eq!(covered, size[0] as u64 * size[1] as u64);
+                let chunked: u32 = p.chunks().iter().map(|c| c.1).sum();
+                assert_eq!(chunked, samples);
+            }
+        }
+    }
+}
