@@ -390,6 +390,11 @@ impl GpuScene {
                     shininess: p.shininess,
                     ..Default::default()
                 },
+                // lead: replaced by the staged renderer
+                Shader::Wgsl(_) => ShaderNode {
+                    kind: SHADER_PHONG,
+                    ..Default::default()
+                },
                 Shader::Checker(c) => {
                     // Split the eye's position in cells into whole cells (whose
                     // parity we keep) and a fraction, in f64.
