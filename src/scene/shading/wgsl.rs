@@ -15,6 +15,7 @@
 //! `Params`, whose values the scene supplies ([`WgslShader::values`]).
 
 use std::fmt;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// The engine's types a shader file is written against.
@@ -305,6 +306,85 @@ fn identifiers(source: &str) -> Vec<Ident<'_>> {
     out
 }
 
+/// In the function declared at `range` of `source`: the byte ranges of its
+/// parenthesised arguments and of its result type (after `->`; the closing
+/// parenthesis when it has none), where they can be found.
+fn signature_parts(
+    source: &str,
+    range: Range<usize>,
+) -> (Option<Range<usize>>, Option<Range<usize>>) {
+    let text = &source[range.clone()];
+    let Some(open) = text.find('(') else {
+        return (None, None);
+    };
+    let mut depth = 0usize;
+    let mut close = None;
+    for (k, c) in text[open..].char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => {
+                depth -= 1;
+                if depth == 0 {
+                    close = Some(open + k);
+                    break;
+                }
+            }
+            _ => {}
+        }
+    }
+    let Some(close) = close else {
+        return (None, None);
+    };
+    let args = Some(range.start + open..range.start + close + 1);
+    let after = &text[close + 1..];
+    let body = after.find('{').unwrap_or(after.len());
+    let head = &after[..body];
+    let result = match head.find("->") {
+        Some(arrow) => {
+            let ty = &head[arrow + 2..];
+            let lead = ty.len() - ty.trim_start().len();
+            let start = range.start + close + 1 + arrow + 2 + lead;
+            Some(start..start + ty.trim().len())
+        }
+        None => Some(range.start + close..range.start + close + 1),
+    };
+    (args, result)
+}
+
+/// The byte range of member `name` (from its name to the end of its type)
+/// in the struct declared at `range` of `source`.
+fn member_range(source: &str, range: Range<usize>, name: &str) -> Option<Range<usize>> {
+    let text = &source[range.clone()];
+    let body = text.find('{')?;
+    for id in identifiers(&text[body..]) {
+        if id.text != name {
+            continue;
+        }
+        let start = body + id.start;
+        let rest = &text[start + name.len()..];
+        if !rest.trim_start().starts_with(':') {
+            continue;
+        }
+        // The type ends at the `,` or `}` that closes the member, outside `<>`.
+        let mut depth = 0i32;
+        let mut end = text.len();
+        for (k, c) in text[start..].char_indices() {
+            match c {
+                '<' => depth += 1,
+                '>' => depth -= 1,
+                ',' | '}' if depth <= 0 => {
+                    end = start + k;
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let member = text[start..end].trim_end();
+        return Some(range.start + start..range.start + start + member.len());
+    }
+    None
+}
+
 /// The WGSL spelling of type `h` of `module`, for messages.
 fn type_name(module: &naga::Module, h: naga::Handle<naga::Type>) -> String {
     let ty = &module.types[h];
@@ -432,10 +512,11 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         err(place, e.message().to_string())
     })?;
 
-    let span_of = |span: naga::Span| {
+    // A span of the module as a byte range of the user's source.
+    let user_range = |span: naga::Span| {
         span.to_range()
-            .filter(|r| r.start >= offset && r.start <= offset + source.len())
-            .and_then(|r| at(r.start - offset, r.end.saturating_sub(offset)))
+            .filter(|r| r.start >= offset && r.end <= offset + source.len())
+            .map(|r| r.start - offset..r.end - offset)
     };
 
     let mut shade = None;
@@ -456,7 +537,13 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     let check = |h: naga::Handle<naga::Function>, name: &str, second: &str| {
         let f = &module.functions[h];
         let wanted = format!("fn {name}(Surface, {second}, Params) -> vec3<f32>");
-        let here = span_of(module.functions.get_span(h));
+        let (args_at, result_at) = user_range(module.functions.get_span(h))
+            .map(|r| signature_parts(source, r))
+            .unwrap_or_default();
+        let (args_at, result_at) = (
+            args_at.map(|r| locate(source, r.start, r.end)),
+            result_at.map(|r| locate(source, r.start, r.end)),
+        );
         let got_args: Vec<String> = f
             .arguments
             .iter()
@@ -477,7 +564,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
             };
         if !args_ok {
             return Err(err(
-                here,
+                args_at,
                 format!(
                     "`{name}` takes ({}), it must be `{wanted}`",
                     got_args.join(", ")
@@ -487,7 +574,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         let result_ok = f.result.as_ref().is_some_and(|r| is_vec3f(&module, r.ty));
         if !result_ok {
             return Err(err(
-                here,
+                result_at,
                 format!("`{name}` returns {got_result}, it must be `{wanted}`"),
             ));
         }
@@ -506,17 +593,22 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
             .find(|(_, t)| t.name.as_deref() == Some("Params"));
         match params {
             Some((h, t)) => {
+                let whole = user_range(module.types.get_span(h));
                 let naga::TypeInner::Struct { members, .. } = &t.inner else {
                     return Err(err(
-                        span_of(module.types.get_span(h)),
+                        whole.map(|r| locate(source, r.start, r.end)),
                         "`Params` must be a struct".to_string(),
                     ));
                 };
                 for (k, m) in members.iter().enumerate() {
                     let name = m.name.clone().unwrap_or_else(|| format!("#{k}"));
                     let Some(ty) = param_type(&module, m.ty) else {
+                        let place = whole.clone().map(|r| {
+                            let m = member_range(source, r.clone(), &name).unwrap_or(r);
+                            locate(source, m.start, m.end)
+                        });
                         return Err(err(
-                            span_of(module.types.get_span(h)),
+                            place,
                             format!(
                                 "Params field `{name}` has type {}; a Params field must be f32, i32, u32, vec2<f32>, vec3<f32> or vec4<f32>",
                                 type_name(&module, m.ty)
@@ -597,12 +689,9 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
         let r = reflect_str(src).unwrap();
         assert!(r.fields.is_empty());
         assert!(!r.has_ambient);
-        // An empty Params is allowed too.
-        let r = reflect_str(&format!("struct Params {{}}\n{src}"));
-        // naga may refuse an empty struct; either way no panic and no fields.
-        if let Ok(r) = r {
-            assert!(r.fields.is_empty());
-        }
+        // naga parses an empty Params (WGSL proper requires a member): no fields.
+        let r = reflect_str(&format!("struct Params {{}}\n{src}")).unwrap();
+        assert!(r.fields.is_empty());
     }
 
     #[test]
@@ -656,10 +745,13 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             "\n\nfn shade(s: Surface, l: LightSample, p: Params) -> f32 {\n    return 1.0;\n}\n";
         let e = reflect_str(src).unwrap_err();
         assert!(e.message.contains("`shade` returns f32"), "{e}");
-        assert_eq!(e.at.as_ref().map(|a| a.line), Some(3), "{e}");
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (3, 52, 3), "{e}");
         let src = "fn shade(s: Surface, p: Params) -> vec3<f32> {\n    return s.normal;\n}\n";
         let e = reflect_str(src).unwrap_err();
         assert!(e.message.contains("`shade` takes (Surface, Params)"), "{e}");
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (1, 9, 23), "{e}");
         let src = "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\nfn ambient(s: Surface, a: f32, p: Params) -> vec3<f32> { return s.normal; }\n";
         let e = reflect_str(src).unwrap_err();
         assert!(
@@ -693,6 +785,8 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
                 .contains("Params field `n` has type vec3<i32>; a Params field must be"),
             "{e}"
         );
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (1, 17, 12), "{e}");
         let src = "struct Params { m: mat3x3<f32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
         let e = reflect_str(src).unwrap_err();
         assert!(e.message.contains("`m` has type mat3x3<f32>"), "{e}");
