@@ -460,7 +460,8 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     // Names first, from the text: the parse would report a redefinition of
     // the engine's types in terms of the interface.
     let idents = identifiers(source);
-    let mut declares_params = false;
+    // Where the file declares the name `Params` (a struct, or anything else).
+    let mut params_at: Option<Range<usize>> = None;
     for (k, id) in idents.iter().enumerate() {
         if id.text.starts_with(RESERVED_PREFIX) {
             return Err(err(
@@ -485,8 +486,8 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
                 ),
             ));
         }
-        if declares && idents[k - 1].text == "struct" && id.text == "Params" {
-            declares_params = true;
+        if declares && id.text == "Params" && params_at.is_none() {
+            params_at = Some(id.start..id.start + id.text.len());
         }
     }
 
@@ -497,7 +498,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     }
     let offset = text.len();
     text.push_str(source);
-    if !declares_params {
+    if params_at.is_none() {
         text.push('\n');
         text.push_str(PLACEHOLDER_PARAMS);
     }
@@ -519,6 +520,46 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
             .map(|r| r.start - offset..r.end - offset)
     };
 
+    let mut fields = Vec::new();
+    if let Some(declared) = params_at {
+        let params = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Params"));
+        let not_a_struct = || {
+            err(
+                Some(locate(source, declared.start, declared.end)),
+                "`Params` must be declared as `struct Params { ... }`".to_string(),
+            )
+        };
+        match params {
+            Some((h, t)) => {
+                let whole = user_range(module.types.get_span(h));
+                let naga::TypeInner::Struct { members, .. } = &t.inner else {
+                    return Err(not_a_struct());
+                };
+                for (k, m) in members.iter().enumerate() {
+                    let name = m.name.clone().unwrap_or_else(|| format!("#{k}"));
+                    let Some(ty) = param_type(&module, m.ty) else {
+                        let place = whole.clone().map(|r| {
+                            let m = member_range(source, r.clone(), &name).unwrap_or(r);
+                            locate(source, m.start, m.end)
+                        });
+                        return Err(err(
+                            place,
+                            format!(
+                                "Params field `{name}` has type {}; a Params field must be f32, i32, u32, vec2<f32>, vec3<f32> or vec4<f32>",
+                                type_name(&module, m.ty)
+                            ),
+                        ));
+                    };
+                    fields.push(ParamField { name, ty });
+                }
+            }
+            // `Params` declared as an alias of another type, a constant...
+            None => return Err(not_a_struct()),
+        }
+    }
     let mut shade = None;
     let mut ambient = None;
     for (h, f) in module.functions.iter() {
@@ -585,44 +626,6 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         check(h, "ambient", "vec3<f32>")?;
     }
 
-    let mut fields = Vec::new();
-    if declares_params {
-        let params = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some("Params"));
-        match params {
-            Some((h, t)) => {
-                let whole = user_range(module.types.get_span(h));
-                let naga::TypeInner::Struct { members, .. } = &t.inner else {
-                    return Err(err(
-                        whole.map(|r| locate(source, r.start, r.end)),
-                        "`Params` must be a struct".to_string(),
-                    ));
-                };
-                for (k, m) in members.iter().enumerate() {
-                    let name = m.name.clone().unwrap_or_else(|| format!("#{k}"));
-                    let Some(ty) = param_type(&module, m.ty) else {
-                        let place = whole.clone().map(|r| {
-                            let m = member_range(source, r.clone(), &name).unwrap_or(r);
-                            locate(source, m.start, m.end)
-                        });
-                        return Err(err(
-                            place,
-                            format!(
-                                "Params field `{name}` has type {}; a Params field must be f32, i32, u32, vec2<f32>, vec3<f32> or vec4<f32>",
-                                type_name(&module, m.ty)
-                            ),
-                        ));
-                    };
-                    fields.push(ParamField { name, ty });
-                }
-            }
-            // `struct Params` in the text but not in the module: cannot
-            // happen after a successful parse, but say so rather than guess.
-            None => return Err(err(None, "`struct Params` was not parsed".to_string())),
-        }
-    }
     Ok(Reflection {
         fields,
         has_ambient: ambient.is_some(),
@@ -790,6 +793,27 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
         let src = "struct Params { m: mat3x3<f32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
         let e = reflect_str(src).unwrap_err();
         assert!(e.message.contains("`m` has type mat3x3<f32>"), "{e}");
+    }
+
+    #[test]
+    fn params_that_is_not_a_struct() {
+        let shade =
+            "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
+        for decl in [
+            "alias Params = f32;",
+            "struct Other { x: f32 }\nalias Params = Other;",
+        ] {
+            let e = reflect_str(&format!("{decl}\n{shade}")).unwrap_err();
+            assert!(
+                e.message
+                    .contains("`Params` must be declared as `struct Params"),
+                "{decl}: {e}"
+            );
+            assert!(e.at.is_some(), "{decl}: {e}");
+        }
+        // A constant named Params: the parse fails where it is used as a type.
+        let e = reflect_str(&format!("const Params = 1.0;\n{shade}")).unwrap_err();
+        assert_eq!(e.at.map(|a| a.line), Some(2));
     }
 
     #[test]
