@@ -614,6 +614,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     let Some(renderer) = renderer.as_mut() else {
+        penumbra::reference::supports(&scene_data)
+            .map_err(|why| anyhow::anyhow!("{}: {why}", scene.display()))?;
         return render_reference(&scene_data, &sampling, &kernel, &out, load, aov);
     };
     if split {

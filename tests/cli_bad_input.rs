@@ -95,6 +95,9 @@ enum Shape {
     OneLine,
     /// clap's usage error: starts with `error: `, followed by a usage hint.
     Clap,
+    /// An error at a place in a source file: the `error: ...` line, then the
+    /// source line and a caret line under the place.
+    Source,
 }
 
 /// Asserts a clean failure: non-zero exit code (not a signal, not a panic),
@@ -128,11 +131,12 @@ fn assert_fails(
         stderr.starts_with("error: "),
         "stderr must start with `error: `\n{ctx}"
     );
-    if shape == Shape::OneLine {
+    if shape == Shape::OneLine || shape == Shape::Source {
+        let lines = if shape == Shape::OneLine { 1 } else { 3 };
         assert_eq!(
             stderr.trim_end().lines().count(),
-            1,
-            "stderr must be one line\n{ctx}"
+            lines,
+            "stderr must be {lines} line(s)\n{ctx}"
         );
         assert!(
             stderr.ends_with('\n'),
@@ -997,4 +1001,241 @@ fn merge_refuses_a_part_claiming_an_image_larger_than_a_render() {
         part.display()
     );
     assert_fails(&out, out_dir.path(), &[], Shape::OneLine, &[&must]);
+}
+
+// ------------------------------------------------------------ WGSL shaders
+
+/// The base scene whose sphere uses the shader `toon` of type `wgsl` from
+/// `file` (copied from `tests/data/shaders/` into the scene's folder) with
+/// `params` (left out when `None`). `raw` replaces text of the JSON, for
+/// numbers that `json!` cannot hold. Returns the folder and the scene path.
+fn wgsl_scene(file: &str, params: Option<Value>, raw: &[(&str, &str)]) -> (TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/shaders");
+    if data.join(file).is_file() {
+        std::fs::copy(data.join(file), dir.path().join(file)).unwrap();
+    }
+    let mut json = mutated(|v| {
+        let mut toon = json!({"type": "wgsl", "file": file});
+        if let Some(p) = params {
+            toon["params"] = p;
+        }
+        v["shaders"]["toon"] = toon;
+        v["objects"][1]["shader"] = json!("toon");
+    });
+    for (from, to) in raw {
+        assert!(json.contains(from), "{from} not in the scene");
+        json = json.replace(from, to);
+    }
+    let scene = dir.path().join("scene.json");
+    std::fs::write(&scene, json).unwrap();
+    (dir, scene)
+}
+
+/// Valid params of `toon.wgsl` with one change.
+fn toon_params(change: impl FnOnce(&mut Value)) -> Option<Value> {
+    let mut p = json!({"base": [0.9, 0.3, 0.2], "bands": 4, "gain": 1.5});
+    change(&mut p);
+    Some(p)
+}
+
+/// Renders the scene of [`wgsl_scene`] and asserts a clean failure of
+/// `shape` naming the scene file, `field` as `: field: `, and every string
+/// of `must`.
+#[track_caller]
+fn wgsl_fails(
+    file: &str,
+    params: Option<Value>,
+    raw: &[(&str, &str)],
+    field: &str,
+    shape: Shape,
+    must: &[&str],
+) -> String {
+    let (_dir, scene) = wgsl_scene(file, params, raw);
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene, out_dir.path(), &[]), &[]);
+    let path = scene.display().to_string();
+    let at = format!(": {field}: ");
+    let mut all = vec![path.as_str(), at.as_str()];
+    all.extend_from_slice(must);
+    assert_fails(&out, out_dir.path(), &[], shape, &all)
+}
+
+#[test]
+fn wgsl_shader_without_shade() {
+    wgsl_fails(
+        "no_shade.wgsl",
+        None,
+        &[],
+        "shaders.toon.file",
+        Shape::OneLine,
+        &[
+            "no_shade.wgsl: ",
+            "no `fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32>`",
+        ],
+    );
+}
+
+#[test]
+fn wgsl_shade_with_the_wrong_return_type() {
+    wgsl_fails(
+        "shade_returns_f32.wgsl",
+        None,
+        &[],
+        "shaders.toon.file",
+        Shape::Source,
+        &[
+            "shade_returns_f32.wgsl:2:",
+            "`shade` returns f32, it must be `fn shade(Surface, LightSample, Params) -> vec3<f32>`",
+        ],
+    );
+}
+
+#[test]
+fn wgsl_syntax_error_points_into_the_users_file() {
+    let stderr = wgsl_fails(
+        "syntax_error.wgsl",
+        None,
+        &[],
+        "shaders.toon.file",
+        Shape::Source,
+        &["syntax_error.wgsl:4:13: "],
+    );
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines[1], " 4 |     let q = ;", "{stderr}");
+    assert_eq!(lines[2], "   |             ^", "{stderr}");
+}
+
+#[test]
+fn wgsl_file_missing() {
+    wgsl_fails(
+        "missing.wgsl",
+        None,
+        &[],
+        "shaders.toon.file",
+        Shape::OneLine,
+        &["no such file", "missing.wgsl"],
+    );
+}
+
+#[test]
+fn wgsl_params_field_missing() {
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| {
+            p.as_object_mut().unwrap().remove("bands");
+        }),
+        &[],
+        "shaders.toon.params.bands",
+        Shape::OneLine,
+        &["missing: Params field `bands: u32` of toon.wgsl has no value"],
+    );
+    // Without `params` at all, the first field is missing.
+    wgsl_fails(
+        "toon.wgsl",
+        None,
+        &[],
+        "shaders.toon.params.base",
+        Shape::OneLine,
+        &["missing: Params field `base: vec3<f32>` of toon.wgsl has no value"],
+    );
+}
+
+#[test]
+fn wgsl_params_extra_field() {
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["extra"] = json!(1)),
+        &[],
+        "shaders.toon.params.extra",
+        Shape::OneLine,
+        &["toon.wgsl's Params has no field `extra`"],
+    );
+    // A file without Params takes no params.
+    wgsl_fails(
+        "plain.wgsl",
+        Some(json!({"gain": 1})),
+        &[],
+        "shaders.toon.params.gain",
+        Shape::OneLine,
+        &["plain.wgsl's Params has no field `gain`"],
+    );
+}
+
+#[test]
+fn wgsl_params_of_the_wrong_type() {
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["gain"] = json!("bright")),
+        &[],
+        "shaders.toon.params.gain",
+        Shape::OneLine,
+        &["Params field `gain` of toon.wgsl is f32, expected a number, got a string"],
+    );
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["base"] = json!([0.9, 0.3])),
+        &[],
+        "shaders.toon.params.base",
+        Shape::OneLine,
+        &["Params field `base` of toon.wgsl is vec3<f32>, expected an array of 3 numbers, got 2"],
+    );
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["bands"] = json!(1.5)),
+        &[],
+        "shaders.toon.params.bands",
+        Shape::OneLine,
+        &["Params field `bands` of toon.wgsl is u32, expected an integer in 0..=4294967295, got 1.5"],
+    );
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["bands"] = json!(-1)),
+        &[],
+        "shaders.toon.params.bands",
+        Shape::OneLine,
+        &["is u32, expected an integer", "got -1"],
+    );
+}
+
+#[test]
+fn wgsl_params_not_finite() {
+    // Beyond f64: serde_json refuses the number while parsing, at its path.
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["gain"] = json!("HUGE")),
+        &[("\"HUGE\"", "1e999")],
+        "shaders.toon.params.gain",
+        Shape::OneLine,
+        &["number out of range"],
+    );
+    // Beyond f32: finite as JSON, infinite as the shader's f32.
+    wgsl_fails(
+        "toon.wgsl",
+        toon_params(|p| p["base"] = json!([0.9, 1e39, 0.2])),
+        &[],
+        "shaders.toon.params.base",
+        Shape::OneLine,
+        &["Params field `base` of toon.wgsl is vec3<f32>, expected a finite number, got 1e39"],
+    );
+}
+
+#[test]
+fn reference_refuses_a_wgsl_shader() {
+    let (_dir, scene) = wgsl_scene("toon.wgsl", toon_params(|_| {}), &[]);
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene, out_dir.path(), &["--reference"]), &[]);
+    let path = scene.display().to_string();
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            &path,
+            "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker)",
+            "is a WGSL file",
+            "toon.wgsl",
+        ],
+    );
 }

@@ -13,8 +13,8 @@ use serde::Deserialize;
 use super::{LoadOptions, Loaded};
 use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::scene::{
-    Camera, Checker, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, ShaderId,
-    Shape, Sphere, Triangle,
+    Camera, Checker, Light, LightKind, Object, ParamField, ParamType, ParamValue, Phong, Plane,
+    Projection, Scene, Shader, ShaderId, Shape, Sphere, Triangle, WgslShader,
 };
 use crate::SceneError;
 
@@ -69,6 +69,7 @@ enum ShaderKind {
     Phong,
     BlinnPhong,
     Checker,
+    Wgsl,
 }
 
 #[derive(Deserialize)]
@@ -83,6 +84,8 @@ struct ShaderFile {
     size: Option<f64>,
     even: Option<String>,
     odd: Option<String>,
+    file: Option<PathBuf>,
+    params: Option<serde_json::Map<String, serde_json::Value>>,
 }
 
 #[derive(Deserialize, PartialEq, Clone, Copy)]
@@ -184,6 +187,12 @@ fn fields_for(
     }
     Ok(())
 }
+
+/// The shaders of a scene file, their ids by name, and the WGSL files read.
+type Shaders = (Vec<Shader>, BTreeMap<String, ShaderId>, Vec<PathBuf>);
+
+/// The WGSL files read so far, by resolved path: text and reflection.
+type WgslFiles = BTreeMap<PathBuf, (String, crate::scene::shading::Reflection)>;
 
 struct Reader<'a> {
     file: &'a Path,
@@ -325,10 +334,175 @@ impl Reader<'_> {
         })
     }
 
+    /// Reads, once per file, the WGSL file `rel` of shader `at` (relative to
+    /// the scene's folder `base`) and reflects it; `read` keeps what was read.
+    fn wgsl_file(
+        &self,
+        at: &str,
+        rel: &Path,
+        base: &Path,
+        guard: &super::guard::Guard,
+        read: &mut WgslFiles,
+    ) -> Result<(PathBuf, String, crate::scene::shading::Reflection), SceneError> {
+        let field = format!("{at}.file");
+        let path = base.join(rel);
+        if let Some((source, r)) = read.get(&path) {
+            return Ok((path, source.clone(), r.clone()));
+        }
+        if !path.exists() {
+            return Err(self.err(field, format!("no such file: {}", path.display())));
+        }
+        let bytes = guard
+            .read(&path, "shader file")
+            .map_err(|e| self.err(&field, e.0))?;
+        let source = String::from_utf8(bytes).map_err(|e| {
+            self.err(
+                &field,
+                format!("cannot read shader file {}: {e}", path.display()),
+            )
+        })?;
+        let r = crate::scene::shading::reflect(&path, &source)
+            .map_err(|e| self.err(&field, e.to_string()))?;
+        read.insert(path.clone(), (source.clone(), r.clone()));
+        Ok((path, source, r))
+    }
+
+    /// The value of Params field `field` of shader file `file` from the JSON
+    /// value `v` at `at`.
+    fn param(
+        &self,
+        at: &str,
+        file: &str,
+        field: &ParamField,
+        v: &serde_json::Value,
+    ) -> Result<ParamValue, SceneError> {
+        use serde_json::Value;
+        let what = |v: &Value| match v {
+            Value::Null => "null".to_string(),
+            Value::Bool(b) => format!("{b}"),
+            Value::Number(n) => format!("{n}"),
+            Value::String(_) => "a string".to_string(),
+            Value::Array(a) => format!("an array of {}", a.len()),
+            Value::Object(_) => "an object".to_string(),
+        };
+        let (name, ty) = (&field.name, field.ty);
+        let wrong = |expected: &str| {
+            self.err(
+                at,
+                format!(
+                    "Params field `{name}` of {file} is {ty}, expected {expected}, got {}",
+                    what(v)
+                ),
+            )
+        };
+        // An f32 from a JSON number: finite also after rounding to f32.
+        let float = |x: &Value, label: &str| -> Result<f32, SceneError> {
+            let Some(f) = x.as_f64() else {
+                return Err(self.err(
+                    at,
+                    format!(
+                        "Params field `{name}` of {file} is {ty}, expected {label}, got {}",
+                        what(x)
+                    ),
+                ));
+            };
+            let g = f as f32;
+            if !g.is_finite() {
+                return Err(self.err(
+                    at,
+                    format!("Params field `{name}` of {file} is {ty}, expected a finite number, got {f:e} (not finite as f32)"),
+                ));
+            }
+            Ok(g)
+        };
+        match ty {
+            ParamType::F32 => Ok(ParamValue::F32(float(v, "a number")?)),
+            ParamType::I32 => v
+                .as_i64()
+                .and_then(|x| i32::try_from(x).ok())
+                .map(ParamValue::I32)
+                .ok_or_else(|| wrong("an integer in -2147483648..=2147483647")),
+            ParamType::U32 => v
+                .as_u64()
+                .and_then(|x| u32::try_from(x).ok())
+                .map(ParamValue::U32)
+                .ok_or_else(|| wrong("an integer in 0..=4294967295")),
+            ParamType::Vec2 | ParamType::Vec3 | ParamType::Vec4 => {
+                let n = ty.words();
+                let expected = format!("an array of {n} numbers");
+                let Value::Array(items) = v else {
+                    return Err(wrong(&expected));
+                };
+                if items.len() != n {
+                    return Err(self.err(
+                        at,
+                        format!(
+                            "Params field `{name}` of {file} is {ty}, expected {expected}, got {}",
+                            items.len()
+                        ),
+                    ));
+                }
+                let xs = items
+                    .iter()
+                    .map(|x| float(x, &expected))
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(ParamValue::Vec(xs))
+            }
+        }
+    }
+
+    /// A `wgsl` shader at `at`: its file, reflected, and its params.
+    fn wgsl(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        base: &Path,
+        guard: &super::guard::Guard,
+        read: &mut WgslFiles,
+    ) -> Result<WgslShader, SceneError> {
+        let rel = s.file.clone().unwrap_or_default();
+        let (path, source, r) = self.wgsl_file(at, &rel, base, guard, read)?;
+        let file = rel.display().to_string();
+        let empty = serde_json::Map::new();
+        let given = s.params.as_ref().unwrap_or(&empty);
+        for key in given.keys() {
+            if !r.fields.iter().any(|f| &f.name == key) {
+                return Err(self.err(
+                    format!("{at}.params.{key}"),
+                    format!("{file}'s Params has no field `{key}`"),
+                ));
+            }
+        }
+        let mut values = Vec::with_capacity(r.fields.len());
+        for field in &r.fields {
+            let fat = format!("{at}.params.{}", field.name);
+            let Some(v) = given.get(&field.name) else {
+                return Err(self.err(
+                    fat,
+                    format!(
+                        "missing: Params field `{}: {}` of {file} has no value",
+                        field.name, field.ty
+                    ),
+                ));
+            };
+            values.push(self.param(&fat, &file, field, v)?);
+        }
+        Ok(WgslShader {
+            path,
+            source,
+            fields: r.fields,
+            values,
+            has_ambient: r.has_ambient,
+        })
+    }
+
     fn shaders(
         &self,
         files: &BTreeMap<String, ShaderFile>,
-    ) -> Result<(Vec<Shader>, BTreeMap<String, ShaderId>), SceneError> {
+        base: &Path,
+        guard: &super::guard::Guard,
+    ) -> Result<Shaders, SceneError> {
+        let mut read = BTreeMap::new();
         let ids: BTreeMap<String, ShaderId> = files
             .keys()
             .enumerate()
@@ -339,10 +513,13 @@ impl Reader<'_> {
             let at = format!("shaders.{name}");
             let f = |k: &str| format!("{at}.{k}");
             let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
+            let checker = s.kind == ShaderKind::Checker;
+            let wgsl = s.kind == ShaderKind::Wgsl;
             let kind = match s.kind {
                 ShaderKind::Phong => "a phong shader",
                 ShaderKind::BlinnPhong => "a blinn_phong shader",
                 ShaderKind::Checker => "a checker shader",
+                ShaderKind::Wgsl => "a wgsl shader",
             };
             fields_for(
                 self.file,
@@ -350,9 +527,10 @@ impl Reader<'_> {
                 kind,
                 &[
                     ("diffuse", s.diffuse.is_some(), phong),
-                    ("size", s.size.is_some(), !phong),
-                    ("even", s.even.is_some(), !phong),
-                    ("odd", s.odd.is_some(), !phong),
+                    ("size", s.size.is_some(), checker),
+                    ("even", s.even.is_some(), checker),
+                    ("odd", s.odd.is_some(), checker),
+                    ("file", s.file.is_some(), wgsl),
                 ],
             )?;
             for (k, present) in [
@@ -363,6 +541,13 @@ impl Reader<'_> {
                 if present && !phong {
                     return Err(self.err(f(k), format!("not a field of {kind}")));
                 }
+            }
+            if s.params.is_some() && !wgsl {
+                return Err(self.err(f("params"), format!("not a field of {kind}")));
+            }
+            if wgsl {
+                shaders.push(Shader::Wgsl(self.wgsl(&at, s, base, guard, &mut read)?));
+                continue;
             }
             shaders.push(if phong {
                 let shininess = s.shininess.unwrap_or(1.0);
@@ -422,7 +607,7 @@ impl Reader<'_> {
                 }
             }
         }
-        Ok((shaders, ids))
+        Ok((shaders, ids, read.into_keys().collect()))
     }
 
     fn light(&self, i: usize, l: &LightFile) -> Result<Light, SceneError> {
@@ -577,11 +762,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
     let r = Reader { file: path };
     let camera = r.camera(&file.camera, opts)?;
     let background = r.colour("background", file.background)?;
-    let (mut shaders, ids) = r.shaders(&file.shaders)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let (mut shaders, ids, shader_files) = r.shaders(&file.shaders, base, &guard)?;
     let mut objects = Vec::new();
     let mut notes = Vec::new();
     let mut files = vec![path.to_path_buf()];
-    let base = path.parent().unwrap_or(Path::new("."));
+    files.extend(shader_files);
     for (i, o) in file.objects.iter().enumerate() {
         let at = format!("objects[{i}]");
         let f = |k: &str| format!("{at}.{k}");

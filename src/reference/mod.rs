@@ -186,6 +186,30 @@ impl World {
     }
 }
 
+/// Whether the reference can render `scene`: it runs only the built-in
+/// shaders, so a scene whose objects reach a WGSL shader (directly or through
+/// a checker) is refused with a message naming that shader and its file.
+pub fn supports(scene: &Scene) -> Result<(), String> {
+    let mut seen = vec![false; scene.shaders.len()];
+    let mut todo: Vec<usize> = scene.objects.iter().map(|o| o.shader).collect();
+    while let Some(id) = todo.pop() {
+        if id >= seen.len() || std::mem::replace(&mut seen[id], true) {
+            continue;
+        }
+        match &scene.shaders[id] {
+            Shader::Checker(c) => todo.extend([c.even, c.odd]),
+            Shader::Wgsl(w) => {
+                return Err(format!(
+                    "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker); shader `shaders[{id}]` is a WGSL file ({})",
+                    w.path.display()
+                ))
+            }
+            Shader::Phong(_) | Shader::BlinnPhong(_) => {}
+        }
+    }
+    Ok(())
+}
+
 /// Renders a validated scene at its camera's size: the mean of
 /// `sampling.spp` passes (fewer if `sampling.time_budget` runs out, checked
 /// after each pass as on the GPU), each one sample per pixel, rows in
@@ -199,13 +223,17 @@ impl World {
 /// # Panics
 ///
 /// If `sampling.spp` is not in `1..=MAX_SPP` (the command line rejects such
-/// values before).
+/// values before), or if the scene uses a WGSL shader ([`supports`], which
+/// the command line checks before).
 pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Frame {
     assert!(
         (1..=MAX_SPP).contains(&sampling.spp),
         "spp must be in 1..={MAX_SPP}, got {}",
         sampling.spp
     );
+    if let Err(why) = supports(scene) {
+        panic!("{why}");
+    }
     let t0 = Instant::now();
     let world = World::new(scene, kernel.sampler, sampling.seed);
     let accel_build = t0.elapsed();

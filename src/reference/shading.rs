@@ -63,8 +63,9 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
             shininess: m.shininess as f64,
         },
         // Only a cyclic table (which validation rules out) ends here; the
-        // GPU would read the checker node's zero colours.
-        Shader::Checker(_) => Lobe {
+        // GPU would read the checker node's zero colours. A WGSL shader never
+        // gets here: `reference::render` refuses such a scene first.
+        Shader::Checker(_) | Shader::Wgsl(_) => Lobe {
             blinn: false,
             ambient: DVec3::ZERO,
             diffuse: DVec3::ZERO,

@@ -14,7 +14,9 @@ mod validate;
 pub use camera::{Camera, Projection};
 pub use light::{Light, LightKind, MAX_LIGHT_SAMPLES};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
-pub use shading::{Checker, Phong, Shader, ShaderId};
+pub use shading::{
+    Checker, ParamField, ParamType, ParamValue, Phong, Shader, ShaderId, WgslShader,
+};
 pub use validate::{Invalid, MAX_IMAGE_SIDE};
 
 use glam::Vec3;
@@ -135,6 +137,8 @@ impl Scene {
                     f.checker = true;
                     todo.extend([c.even, c.odd]);
                 }
+                // A WGSL file is its own pipeline, not a built-in kernel feature.
+                Shader::Wgsl(_) => {}
             }
         }
         f

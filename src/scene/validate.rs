@@ -188,6 +188,33 @@ pub(super) fn scene(s: &Scene) -> Result<(), Invalid> {
                     }
                 }
             }
+            Shader::Wgsl(w) => {
+                if w.values.len() != w.fields.len() {
+                    return Err(Invalid::new(
+                        f("values"),
+                        format!(
+                            "need one value per Params field: {} fields, {} values",
+                            w.fields.len(),
+                            w.values.len()
+                        ),
+                    ));
+                }
+                for (field, value) in w.fields.iter().zip(&w.values) {
+                    let at = f(&format!("values.{}", field.name));
+                    if !value.fits(field.ty) {
+                        return Err(Invalid::new(
+                            at,
+                            format!(
+                                "Params field `{}` is {}, got {value:?}",
+                                field.name, field.ty
+                            ),
+                        ));
+                    }
+                    if !value.is_finite() {
+                        return Err(Invalid::new(at, format!("must be finite, got {value:?}")));
+                    }
+                }
+            }
         }
     }
     // Checkers nest; a cycle would make shading loop forever. Kahn-style

@@ -1,5 +1,6 @@
-//! Shading models ("shaders" in the seminar): Phong, Blinn-Phong and the 3D
-//! checkerboard made of two sub-shaders. The GPU versions live in
+//! Shading models ("shaders" in the seminar): Phong, Blinn-Phong, the 3D
+//! checkerboard made of two sub-shaders, and shaders written as WGSL files
+//! ([`wgsl`]). The GPU versions of the built-in ones live in
 //! `shaders/shading/` under the same names.
 //!
 //! For each light the colour at a point is
@@ -10,9 +11,13 @@
 pub mod blinn_phong;
 pub mod checker;
 pub mod phong;
+pub mod wgsl;
 
 pub use checker::Checker;
 pub use phong::Phong;
+pub use wgsl::{
+    reflect, Location, ParamField, ParamType, ParamValue, Reflection, ShaderFileError, WgslShader,
+};
 
 /// Index into [`crate::scene::Scene::shaders`].
 pub type ShaderId = usize;
@@ -26,4 +31,6 @@ pub enum Shader {
     BlinnPhong(Phong),
     /// 3D checkerboard of two sub-shaders.
     Checker(Checker),
+    /// A shader written as a WGSL file, with its `Params` values.
+    Wgsl(WgslShader),
 }

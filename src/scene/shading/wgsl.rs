@@ -1,0 +1,843 @@
+//! Shaders written as WGSL files (issue 13): the scene model of one, and the
+//! reflection that reads its interface.
+//!
+//! A shader file defines
+//!
+//! ```wgsl
+//! fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32>                // required
+//! fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32>    // optional
+//! struct Params { ... }                                                       // optional
+//! ```
+//!
+//! against the engine's types of `shaders/shading/interface.wgsl`. [`reflect`]
+//! parses the file after that interface (parse only: the renderer validates
+//! the pipeline it builds), checks the signatures, and lists the members of
+//! `Params`, whose values the scene supplies ([`WgslShader::values`]).
+
+use std::fmt;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// The engine's types a shader file is written against.
+pub const INTERFACE: &str = include_str!("../../../shaders/shading/interface.wgsl");
+
+/// The types the engine declares; a shader file must not declare them.
+pub const ENGINE_TYPES: [&str; 2] = ["Surface", "LightSample"];
+
+/// Names that start with this are the engine's; a shader file must not use them.
+pub const RESERVED_PREFIX: &str = "penumbra_";
+
+/// What the parse-only check appends when a file declares no `Params`: the
+/// engine supplies the same placeholder.
+const PLACEHOLDER_PARAMS: &str = "struct Params { penumbra_unused: u32 }\n";
+
+/// The type of one member of `Params`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ParamType {
+    /// `f32`.
+    F32,
+    /// `i32`.
+    I32,
+    /// `u32`.
+    U32,
+    /// `vec2<f32>`.
+    Vec2,
+    /// `vec3<f32>`.
+    Vec3,
+    /// `vec4<f32>`.
+    Vec4,
+}
+
+impl ParamType {
+    /// Number of 32-bit words the value takes in [`WgslShader::words`].
+    pub fn words(self) -> usize {
+        match self {
+            ParamType::F32 | ParamType::I32 | ParamType::U32 => 1,
+            ParamType::Vec2 => 2,
+            ParamType::Vec3 => 3,
+            ParamType::Vec4 => 4,
+        }
+    }
+
+    /// The type as WGSL spells it (`f32`, `vec3<f32>`...).
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            ParamType::F32 => "f32",
+            ParamType::I32 => "i32",
+            ParamType::U32 => "u32",
+            ParamType::Vec2 => "vec2<f32>",
+            ParamType::Vec3 => "vec3<f32>",
+            ParamType::Vec4 => "vec4<f32>",
+        }
+    }
+}
+
+impl fmt::Display for ParamType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.wgsl())
+    }
+}
+
+/// One member of `Params`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct ParamField {
+    /// The member's name.
+    pub name: String,
+    /// Its type.
+    pub ty: ParamType,
+}
+
+/// The value of one member of `Params`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamValue {
+    /// For an `f32` member.
+    F32(f32),
+    /// For an `i32` member.
+    I32(i32),
+    /// For a `u32` member.
+    U32(u32),
+    /// For a `vecN<f32>` member: exactly N components.
+    Vec(Vec<f32>),
+}
+
+impl ParamValue {
+    /// Whether this value fills a member of type `ty`.
+    pub fn fits(&self, ty: ParamType) -> bool {
+        match (self, ty) {
+            (ParamValue::F32(_), ParamType::F32)
+            | (ParamValue::I32(_), ParamType::I32)
+            | (ParamValue::U32(_), ParamType::U32) => true,
+            (ParamValue::Vec(v), ParamType::Vec2 | ParamType::Vec3 | ParamType::Vec4) => {
+                v.len() == ty.words()
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether every floating-point component is finite.
+    pub fn is_finite(&self) -> bool {
+        match self {
+            ParamValue::F32(x) => x.is_finite(),
+            ParamValue::Vec(v) => v.iter().all(|x| x.is_finite()),
+            ParamValue::I32(_) | ParamValue::U32(_) => true,
+        }
+    }
+}
+
+/// A shader given as a WGSL file, with the values of its `Params`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WgslShader {
+    /// The file as resolved (relative to the scene file's folder).
+    pub path: PathBuf,
+    /// Its text as loaded.
+    pub source: String,
+    /// The members of `Params` in declaration order; empty when the file
+    /// declares no `Params`.
+    pub fields: Vec<ParamField>,
+    /// One value per field, in the same order.
+    pub values: Vec<ParamValue>,
+    /// The file defines `fn ambient`.
+    pub has_ambient: bool,
+}
+
+impl WgslShader {
+    /// The values packed tightly in field order: `f32`, `i32` and `u32` as
+    /// their bits (one word each), `vecN<f32>` as N `f32` words.
+    pub fn words(&self) -> Vec<u32> {
+        let mut words = Vec::with_capacity(self.fields.iter().map(|f| f.ty.words()).sum());
+        for v in &self.values {
+            match v {
+                ParamValue::F32(x) => words.push(x.to_bits()),
+                ParamValue::I32(x) => words.push(*x as u32),
+                ParamValue::U32(x) => words.push(*x),
+                ParamValue::Vec(xs) => words.extend(xs.iter().map(|x| x.to_bits())),
+            }
+        }
+        words
+    }
+}
+
+/// What [`reflect`] reads from a shader file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Reflection {
+    /// The members of `Params` in declaration order; empty without `Params`.
+    pub fields: Vec<ParamField>,
+    /// The file defines `fn ambient`.
+    pub has_ambient: bool,
+}
+
+/// A place in a shader file, for an error message.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    /// 1-based line number.
+    pub line: usize,
+    /// 1-based column, in characters.
+    pub column: usize,
+    /// The text of that line (without its line break).
+    pub line_text: String,
+    /// How many characters the caret line marks (at least 1).
+    pub width: usize,
+}
+
+/// A problem with a shader file: which file, where in it (when known) and what.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ShaderFileError {
+    /// The shader file.
+    pub path: PathBuf,
+    /// Where in it, when the problem has a place.
+    pub at: Option<Location>,
+    /// What is wrong, in plain words.
+    pub message: String,
+}
+
+impl fmt::Display for ShaderFileError {
+    /// `FILE:LINE:COL: MESSAGE`, then the source line and a caret under the
+    /// span on two more lines; `FILE: MESSAGE` without a place.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Some(at) = &self.at else {
+            return write!(f, "{}: {}", self.path.display(), self.message);
+        };
+        write!(
+            f,
+            "{}:{}:{}: {}",
+            self.path.display(),
+            at.line,
+            at.column,
+            self.message
+        )?;
+        let number = at.line.to_string();
+        let gutter = " ".repeat(number.len());
+        // Keep tabs so that the caret lines up under the same characters.
+        let indent: String = at
+            .line_text
+            .chars()
+            .take(at.column - 1)
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
+        write!(
+            f,
+            "\n {number} | {}\n {gutter} | {indent}{}",
+            at.line_text,
+            "^".repeat(at.width.max(1))
+        )
+    }
+}
+
+impl std::error::Error for ShaderFileError {}
+
+/// The place of byte range `start..end` of `source`.
+fn locate(source: &str, start: usize, end: usize) -> Location {
+    let start = floor_char_boundary(source, start.min(source.len()));
+    let end = floor_char_boundary(source, end.clamp(start, source.len()));
+    let line_start = source[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = source[start..]
+        .find('\n')
+        .map_or(source.len(), |i| start + i);
+    let line_text = source[line_start..line_end].trim_end_matches('\r');
+    let column = source[line_start..start].chars().count() + 1;
+    let width = source[start..end.min(line_end)].chars().count();
+    Location {
+        line: source[..start].matches('\n').count() + 1,
+        column,
+        line_text: line_text.to_string(),
+        width: width.max(1),
+    }
+}
+
+/// The largest char boundary of `s` at or below `i`.
+fn floor_char_boundary(s: &str, mut i: usize) -> usize {
+    while i > 0 && !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+/// One identifier of WGSL source outside comments: its text and byte range.
+struct Ident<'a> {
+    text: &'a str,
+    start: usize,
+}
+
+/// The identifiers (and keywords) of `source`, skipping comments and numbers.
+fn identifiers(source: &str) -> Vec<Ident<'_>> {
+    let bytes = source.as_bytes();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let rest = &source[i..];
+        if rest.starts_with("//") {
+            i += rest.find('\n').unwrap_or(rest.len());
+        } else if rest.starts_with("/*") {
+            // Block comments nest in WGSL.
+            let mut depth = 0usize;
+            while i < bytes.len() {
+                if source[i..].starts_with("/*") {
+                    depth += 1;
+                    i += 2;
+                } else if source[i..].starts_with("*/") {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    i += 1;
+                }
+            }
+        } else {
+            let c = rest.chars().next().unwrap_or(' ');
+            if c.is_alphanumeric() || c == '_' {
+                let len = rest
+                    .char_indices()
+                    .find(|&(_, c)| !(c.is_alphanumeric() || c == '_'))
+                    .map_or(rest.len(), |(k, _)| k);
+                if !c.is_ascii_digit() {
+                    out.push(Ident {
+                        text: &rest[..len],
+                        start: i,
+                    });
+                }
+                i += len;
+            } else {
+                i += c.len_utf8();
+            }
+        }
+    }
+    out
+}
+
+/// In the function declared at `range` of `source`: the byte ranges of its
+/// parenthesised arguments and of its result type (after `->`; the closing
+/// parenthesis when it has none), where they can be found.
+fn signature_parts(
+    source: &str,
+    range: Range<usize>,
+) -> (Option<Range<usize>>, Option<Range<usize>>) {
+    let text = &source[range.clone()];
+    let Some(open) = text.find('(') else {
+        return (None, None);
+    };
+    let mut depth = 0usize;
+    let mut close = None;
+    for (k, c) in text[open..].char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => {
+                depth -= 1;
+                if depth == 0 {
+                    close = Some(open + k);
+                    break;
+                }
+            }
+            _ => {}
+        }
+    }
+    let Some(close) = close else {
+        return (None, None);
+    };
+    let args = Some(range.start + open..range.start + close + 1);
+    let after = &text[close + 1..];
+    let body = after.find('{').unwrap_or(after.len());
+    let head = &after[..body];
+    let result = match head.find("->") {
+        Some(arrow) => {
+            let ty = &head[arrow + 2..];
+            let lead = ty.len() - ty.trim_start().len();
+            let start = range.start + close + 1 + arrow + 2 + lead;
+            Some(start..start + ty.trim().len())
+        }
+        None => Some(range.start + close..range.start + close + 1),
+    };
+    (args, result)
+}
+
+/// The byte range of member `name` (from its name to the end of its type)
+/// in the struct declared at `range` of `source`.
+fn member_range(source: &str, range: Range<usize>, name: &str) -> Option<Range<usize>> {
+    let text = &source[range.clone()];
+    let body = text.find('{')?;
+    for id in identifiers(&text[body..]) {
+        if id.text != name {
+            continue;
+        }
+        let start = body + id.start;
+        let rest = &text[start + name.len()..];
+        if !rest.trim_start().starts_with(':') {
+            continue;
+        }
+        // The type ends at the `,` or `}` that closes the member, outside `<>`.
+        let mut depth = 0i32;
+        let mut end = text.len();
+        for (k, c) in text[start..].char_indices() {
+            match c {
+                '<' => depth += 1,
+                '>' => depth -= 1,
+                ',' | '}' if depth <= 0 => {
+                    end = start + k;
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let member = text[start..end].trim_end();
+        return Some(range.start + start..range.start + start + member.len());
+    }
+    None
+}
+
+/// The WGSL spelling of type `h` of `module`, for messages.
+fn type_name(module: &naga::Module, h: naga::Handle<naga::Type>) -> String {
+    let ty = &module.types[h];
+    if let Some(name) = &ty.name {
+        return name.clone();
+    }
+    let scalar = |s: naga::Scalar| match (s.kind, s.width) {
+        (naga::ScalarKind::Float, 4) => "f32".to_string(),
+        (naga::ScalarKind::Float, 2) => "f16".to_string(),
+        (naga::ScalarKind::Sint, 4) => "i32".to_string(),
+        (naga::ScalarKind::Uint, 4) => "u32".to_string(),
+        (naga::ScalarKind::Bool, _) => "bool".to_string(),
+        (kind, width) => format!("{kind:?}{}", width * 8).to_lowercase(),
+    };
+    match &ty.inner {
+        naga::TypeInner::Scalar(s) => scalar(*s),
+        naga::TypeInner::Vector { size, scalar: s } => {
+            format!("vec{}<{}>", *size as u8, scalar(*s))
+        }
+        naga::TypeInner::Matrix {
+            columns,
+            rows,
+            scalar: s,
+        } => format!("mat{}x{}<{}>", *columns as u8, *rows as u8, scalar(*s)),
+        naga::TypeInner::Array { base, .. } => format!("array<{}>", type_name(module, *base)),
+        naga::TypeInner::Atomic(s) => format!("atomic<{}>", scalar(*s)),
+        naga::TypeInner::Pointer { base, .. } => format!("ptr<{}>", type_name(module, *base)),
+        other => format!("{other:?}")
+            .split([' ', '{', '('])
+            .next()
+            .unwrap_or("a type")
+            .to_lowercase(),
+    }
+}
+
+/// The [`ParamType`] of type `h`, if it is one a `Params` member may have.
+fn param_type(module: &naga::Module, h: naga::Handle<naga::Type>) -> Option<ParamType> {
+    use naga::{Scalar, TypeInner, VectorSize};
+    match module.types[h].inner {
+        TypeInner::Scalar(Scalar::F32) => Some(ParamType::F32),
+        TypeInner::Scalar(Scalar::I32) => Some(ParamType::I32),
+        TypeInner::Scalar(Scalar::U32) => Some(ParamType::U32),
+        TypeInner::Vector {
+            size,
+            scalar: Scalar::F32,
+        } => Some(match size {
+            VectorSize::Bi => ParamType::Vec2,
+            VectorSize::Tri => ParamType::Vec3,
+            VectorSize::Quad => ParamType::Vec4,
+        }),
+        _ => None,
+    }
+}
+
+/// Whether type `h` is `vec3<f32>`.
+fn is_vec3f(module: &naga::Module, h: naga::Handle<naga::Type>) -> bool {
+    param_type(module, h) == Some(ParamType::Vec3)
+}
+
+/// Parses shader file `path` (text `source`) after the engine's interface,
+/// checks its `shade`, `ambient` and `Params` and the names it must not
+/// declare, and returns the members of `Params` and whether it has `ambient`.
+/// Errors name `path` and, where the problem has a place, the line and
+/// column in the user's own file.
+pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError> {
+    let err = |at: Option<Location>, message: String| ShaderFileError {
+        path: path.to_path_buf(),
+        at,
+        message,
+    };
+    let at = |start: usize, end: usize| Some(locate(source, start, end));
+
+    // Names first, from the text: the parse would report a redefinition of
+    // the engine's types in terms of the interface.
+    let idents = identifiers(source);
+    // Where the file declares the name `Params` (a struct, or anything else).
+    let mut params_at: Option<Range<usize>> = None;
+    for (k, id) in idents.iter().enumerate() {
+        if id.text.starts_with(RESERVED_PREFIX) {
+            return Err(err(
+                at(id.start, id.start + id.text.len()),
+                format!(
+                    "`{}`: names starting with `{RESERVED_PREFIX}` are reserved for the engine",
+                    id.text
+                ),
+            ));
+        }
+        let declares = k > 0
+            && matches!(
+                idents[k - 1].text,
+                "struct" | "alias" | "fn" | "const" | "var" | "override" | "let"
+            );
+        if declares && ENGINE_TYPES.contains(&id.text) {
+            return Err(err(
+                at(id.start, id.start + id.text.len()),
+                format!(
+                    "`{}` is the engine's type (shaders/shading/interface.wgsl); a shader file uses it and must not declare it",
+                    id.text
+                ),
+            ));
+        }
+        if declares && id.text == "Params" && params_at.is_none() {
+            params_at = Some(id.start..id.start + id.text.len());
+        }
+    }
+
+    let mut text = String::with_capacity(INTERFACE.len() + source.len() + 64);
+    text.push_str(INTERFACE);
+    if !text.ends_with('\n') {
+        text.push('\n');
+    }
+    let offset = text.len();
+    text.push_str(source);
+    if params_at.is_none() {
+        text.push('\n');
+        text.push_str(PLACEHOLDER_PARAMS);
+    }
+
+    let parsed = crate::panics::catch(|| naga::front::wgsl::parse_str(&text))
+        .map_err(|m| err(None, format!("the WGSL parser failed: {m}")))?;
+    let module = parsed.map_err(|e| {
+        let span = e.labels().next().and_then(|(s, _)| s.to_range());
+        let place = span
+            .filter(|r| r.start >= offset && r.start <= offset + source.len())
+            .map(|r| locate(source, r.start - offset, r.end.saturating_sub(offset)));
+        err(place, e.message().to_string())
+    })?;
+
+    // A span of the module as a byte range of the user's source.
+    let user_range = |span: naga::Span| {
+        span.to_range()
+            .filter(|r| r.start >= offset && r.end <= offset + source.len())
+            .map(|r| r.start - offset..r.end - offset)
+    };
+
+    let mut fields = Vec::new();
+    if let Some(declared) = params_at {
+        let params = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Params"));
+        let not_a_struct = || {
+            err(
+                Some(locate(source, declared.start, declared.end)),
+                "`Params` must be declared as `struct Params { ... }`".to_string(),
+            )
+        };
+        match params {
+            Some((h, t)) => {
+                let whole = user_range(module.types.get_span(h));
+                let naga::TypeInner::Struct { members, .. } = &t.inner else {
+                    return Err(not_a_struct());
+                };
+                for (k, m) in members.iter().enumerate() {
+                    let name = m.name.clone().unwrap_or_else(|| format!("#{k}"));
+                    let Some(ty) = param_type(&module, m.ty) else {
+                        let place = whole.clone().map(|r| {
+                            let m = member_range(source, r.clone(), &name).unwrap_or(r);
+                            locate(source, m.start, m.end)
+                        });
+                        return Err(err(
+                            place,
+                            format!(
+                                "Params field `{name}` has type {}; a Params field must be f32, i32, u32, vec2<f32>, vec3<f32> or vec4<f32>",
+                                type_name(&module, m.ty)
+                            ),
+                        ));
+                    };
+                    fields.push(ParamField { name, ty });
+                }
+            }
+            // `Params` declared as an alias of another type, a constant...
+            None => return Err(not_a_struct()),
+        }
+    }
+    let mut shade = None;
+    let mut ambient = None;
+    for (h, f) in module.functions.iter() {
+        match f.name.as_deref() {
+            Some("shade") => shade = Some(h),
+            Some("ambient") => ambient = Some(h),
+            _ => {}
+        }
+    }
+    let Some(shade) = shade else {
+        return Err(err(
+            None,
+            "no `fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32>`: every shader file must define it".to_string(),
+        ));
+    };
+    let check = |h: naga::Handle<naga::Function>, name: &str, second: &str| {
+        let f = &module.functions[h];
+        let wanted = format!("fn {name}(Surface, {second}, Params) -> vec3<f32>");
+        let (args_at, result_at) = user_range(module.functions.get_span(h))
+            .map(|r| signature_parts(source, r))
+            .unwrap_or_default();
+        let (args_at, result_at) = (
+            args_at.map(|r| locate(source, r.start, r.end)),
+            result_at.map(|r| locate(source, r.start, r.end)),
+        );
+        let got_args: Vec<String> = f
+            .arguments
+            .iter()
+            .map(|a| type_name(&module, a.ty))
+            .collect();
+        let got_result = f
+            .result
+            .as_ref()
+            .map(|r| type_name(&module, r.ty))
+            .unwrap_or_else(|| "nothing".to_string());
+        let args_ok = got_args.len() == 3
+            && got_args[0] == "Surface"
+            && got_args[2] == "Params"
+            && if second == "LightSample" {
+                got_args[1] == "LightSample"
+            } else {
+                is_vec3f(&module, f.arguments[1].ty)
+            };
+        if !args_ok {
+            return Err(err(
+                args_at,
+                format!(
+                    "`{name}` takes ({}), it must be `{wanted}`",
+                    got_args.join(", ")
+                ),
+            ));
+        }
+        let result_ok = f.result.as_ref().is_some_and(|r| is_vec3f(&module, r.ty));
+        if !result_ok {
+            return Err(err(
+                result_at,
+                format!("`{name}` returns {got_result}, it must be `{wanted}`"),
+            ));
+        }
+        Ok(())
+    };
+    check(shade, "shade", "LightSample")?;
+    if let Some(h) = ambient {
+        check(h, "ambient", "vec3<f32>")?;
+    }
+
+    Ok(Reflection {
+        fields,
+        has_ambient: ambient.is_some(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TOON: &str = "\
+struct Params {
+    base: vec3<f32>,
+    bands: u32,
+    gain: f32,
+    offset: i32,
+    uv_scale: vec2<f32>,
+    tint: vec4<f32>,
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    let d = max(dot(s.normal, l.to_light), 0.0);
+    let q = floor(d * f32(p.bands)) / f32(p.bands);
+    return p.base * q * l.intensity * l.diffuse * p.gain;
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.base * light_ambient;
+}
+";
+
+    fn reflect_str(source: &str) -> Result<Reflection, ShaderFileError> {
+        reflect(Path::new("toon.wgsl"), source)
+    }
+
+    #[test]
+    fn reflects_every_param_type_in_order() {
+        let r = reflect_str(TOON).unwrap();
+        let got: Vec<(&str, ParamType)> = r.fields.iter().map(|f| (&*f.name, f.ty)).collect();
+        assert_eq!(
+            got,
+            vec![
+                ("base", ParamType::Vec3),
+                ("bands", ParamType::U32),
+                ("gain", ParamType::F32),
+                ("offset", ParamType::I32),
+                ("uv_scale", ParamType::Vec2),
+                ("tint", ParamType::Vec4),
+            ]
+        );
+        assert!(r.has_ambient);
+        let wgsl: Vec<&str> = r.fields.iter().map(|f| f.ty.wgsl()).collect();
+        assert_eq!(
+            wgsl,
+            ["vec3<f32>", "u32", "f32", "i32", "vec2<f32>", "vec4<f32>"]
+        );
+        let words: usize = r.fields.iter().map(|f| f.ty.words()).sum();
+        assert_eq!(words, 3 + 1 + 1 + 1 + 2 + 4);
+    }
+
+    #[test]
+    fn without_params_or_ambient() {
+        let src = "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    return s.normal * l.intensity;\n}\n";
+        let r = reflect_str(src).unwrap();
+        assert!(r.fields.is_empty());
+        assert!(!r.has_ambient);
+        // naga parses an empty Params (WGSL proper requires a member): no fields.
+        let r = reflect_str(&format!("struct Params {{}}\n{src}")).unwrap();
+        assert!(r.fields.is_empty());
+    }
+
+    #[test]
+    fn packs_words_in_field_order() {
+        let r = reflect_str(TOON).unwrap();
+        let s = WgslShader {
+            path: "toon.wgsl".into(),
+            source: TOON.into(),
+            fields: r.fields,
+            values: vec![
+                ParamValue::Vec(vec![0.9, 0.3, 0.2]),
+                ParamValue::U32(4),
+                ParamValue::F32(1.5),
+                ParamValue::I32(-2),
+                ParamValue::Vec(vec![2.0, 3.0]),
+                ParamValue::Vec(vec![1.0, 0.0, 0.5, 0.25]),
+            ],
+            has_ambient: r.has_ambient,
+        };
+        assert!(s.values.iter().zip(&s.fields).all(|(v, f)| v.fits(f.ty)));
+        let f = |x: f32| x.to_bits();
+        assert_eq!(
+            s.words(),
+            vec![
+                f(0.9),
+                f(0.3),
+                f(0.2),
+                4,
+                f(1.5),
+                (-2i32) as u32,
+                f(2.0),
+                f(3.0),
+                f(1.0),
+                f(0.0),
+                f(0.5),
+                f(0.25),
+            ]
+        );
+    }
+
+    #[test]
+    fn missing_shade() {
+        let e = reflect_str("fn other() -> f32 { return 1.0; }\n").unwrap_err();
+        assert!(e.message.contains("no `fn shade"), "{e}");
+        assert_eq!(e.path, Path::new("toon.wgsl"));
+    }
+
+    #[test]
+    fn mistyped_shade() {
+        let src =
+            "\n\nfn shade(s: Surface, l: LightSample, p: Params) -> f32 {\n    return 1.0;\n}\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("`shade` returns f32"), "{e}");
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (3, 52, 3), "{e}");
+        let src = "fn shade(s: Surface, p: Params) -> vec3<f32> {\n    return s.normal;\n}\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("`shade` takes (Surface, Params)"), "{e}");
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (1, 9, 23), "{e}");
+        let src = "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\nfn ambient(s: Surface, a: f32, p: Params) -> vec3<f32> { return s.normal; }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(
+            e.message.contains("`ambient` takes (Surface, f32, Params)"),
+            "{e}"
+        );
+        assert_eq!(e.at.as_ref().map(|a| a.line), Some(2), "{e}");
+    }
+
+    #[test]
+    fn syntax_error_points_into_the_users_file() {
+        let src = "// toon\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    let x = ;\n    return s.normal;\n}\n";
+        let e = reflect_str(src).unwrap_err();
+        let at = e.at.clone().expect("a place");
+        assert_eq!((at.line, at.column), (3, 13), "{e}");
+        assert_eq!(at.line_text, "    let x = ;");
+        let shown = e.to_string();
+        let lines: Vec<&str> = shown.lines().collect();
+        assert_eq!(lines.len(), 3, "{shown}");
+        assert!(lines[0].starts_with("toon.wgsl:3:13: "), "{shown}");
+        assert_eq!(lines[1], " 3 |     let x = ;");
+        assert_eq!(lines[2], "   |             ^");
+    }
+
+    #[test]
+    fn params_member_of_another_type() {
+        let src = "struct Params { n: vec3<i32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(
+            e.message
+                .contains("Params field `n` has type vec3<i32>; a Params field must be"),
+            "{e}"
+        );
+        let at = e.at.as_ref().expect("a place");
+        assert_eq!((at.line, at.column, at.width), (1, 17, 12), "{e}");
+        let src = "struct Params { m: mat3x3<f32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("`m` has type mat3x3<f32>"), "{e}");
+    }
+
+    #[test]
+    fn params_that_is_not_a_struct() {
+        let shade =
+            "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
+        for decl in [
+            "alias Params = f32;",
+            "struct Other { x: f32 }\nalias Params = Other;",
+        ] {
+            let e = reflect_str(&format!("{decl}\n{shade}")).unwrap_err();
+            assert!(
+                e.message
+                    .contains("`Params` must be declared as `struct Params"),
+                "{decl}: {e}"
+            );
+            assert!(e.at.is_some(), "{decl}: {e}");
+        }
+        // A constant named Params: the parse fails where it is used as a type.
+        let e = reflect_str(&format!("const Params = 1.0;\n{shade}")).unwrap_err();
+        assert_eq!(e.at.map(|a| a.line), Some(2));
+    }
+
+    #[test]
+    fn reserved_names() {
+        let src = "struct Surface { x: f32 }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return vec3(0.0); }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("`Surface` is the engine's type"), "{e}");
+        assert_eq!(e.at.as_ref().map(|a| (a.line, a.column)), Some((1, 8)));
+        let src = "alias LightSample = f32;\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return vec3(0.0); }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("`LightSample`"), "{e}");
+        let src = "const penumbra_gain = 2.0;\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return vec3(penumbra_gain); }\n";
+        let e = reflect_str(src).unwrap_err();
+        assert!(e.message.contains("reserved for the engine"), "{e}");
+        assert_eq!(e.at.as_ref().map(|a| (a.line, a.column)), Some((1, 7)));
+        // In a comment the names are harmless.
+        let src = "// struct Surface, penumbra_x\n/* fn penumbra_y /* nested */ */\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
+        reflect_str(src).unwrap();
+    }
+
+    #[test]
+    fn locate_counts_characters() {
+        let at = locate("ab\nxé y\n", 7, 8);
+        assert_eq!((at.line, at.column, at.width), (2, 4, 1));
+        assert_eq!(at.line_text, "xé y");
+    }
+}
