@@ -14,42 +14,10 @@ use std::path::PathBuf;
 
 use super::compile::{Assembled, CompileError, ShaderSource};
 use super::stages::SHADE_PRELUDE;
+use crate::scene::shading::wgsl::{reflect, ParamField, ParamType, ShaderFileError};
 
 /// The shade stage's entry point (`shaders/stages/shade.wgsl`).
 pub const SHADE_ENTRY_POINT: &str = "penumbra_shade_stage";
-
-/// The type of one `Params` field, as the packed parameter words hold it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ParamKind {
-    /// `f32`: one word, its bits.
-    F32,
-    /// `i32`: one word.
-    I32,
-    /// `u32`: one word.
-    U32,
-    /// `vecN<f32>` (N = 2, 3, 4): N words.
-    Vec(u8),
-}
-
-impl ParamKind {
-    /// Words the field takes.
-    pub fn words(self) -> u32 {
-        match self {
-            ParamKind::Vec(n) => n as u32,
-            _ => 1,
-        }
-    }
-
-    /// The WGSL type.
-    pub fn wgsl(self) -> String {
-        match self {
-            ParamKind::F32 => "f32".into(),
-            ParamKind::I32 => "i32".into(),
-            ParamKind::U32 => "u32".into(),
-            ParamKind::Vec(n) => format!("vec{n}<f32>"),
-        }
-    }
-}
 
 /// Where a shade program's file comes from.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -76,7 +44,7 @@ pub struct ShadeSource {
     /// Prelude, shader file and generated functions.
     pub assembled: Assembled,
     /// The `Params` fields, in declaration order (empty: none).
-    pub fields: Vec<(String, ParamKind)>,
+    pub fields: Vec<ParamField>,
     /// Whether the file defines `ambient`.
     pub has_ambient: bool,
 }
@@ -101,40 +69,16 @@ pub fn assemble(
 ) -> Result<ShadeSource, CompileError> {
     let mut assembled = source.assemble_files(SHADE_PRELUDE)?;
     assembled.push_file(file.label(), text);
-    // What the file declares, from a parse of prelude and file (plus a
-    // placeholder Params if it has none, which `shade` still takes). When
-    // both parses fail, the error of the file as written is the one to show.
-    let parse = |a: &Assembled| {
-        crate::panics::catch(|| a.parse()).unwrap_or_else(|panic| {
-            Err(CompileError {
-                location: file.label(),
-                message: format!("internal error in naga ({panic}); please report this shader"),
-            })
-        })
-    };
-    let mut declared = source.assemble_files(&SHADE_PRELUDE[..1])?;
-    declared.push_file(file.label(), text);
-    let module = match parse(&declared) {
-        Ok(m) => m,
-        Err(first) => {
-            let mut probe = declared.clone();
-            probe.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
-            parse(&probe).map_err(|_| first)?
-        }
-    };
-    let placeholder = find_struct(&module, "Params").is_some_and(|(_, members)| {
-        members.len() == 1 && members[0].name.as_deref() == Some("penumbra_unused")
-    });
-    let fields = if placeholder {
+    // What the file declares (crate::scene::shading::wgsl, which also
+    // checks `shade` and `ambient`); a file without Params gets the
+    // placeholder that `shade` still takes.
+    let declared = reflect(std::path::Path::new(&file.label()), text).map_err(file_error)?;
+    let placeholder = declared.fields.is_empty() && !declares_params(text);
+    if placeholder {
         assembled.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
-        Vec::new()
-    } else {
-        params_fields(&module, &file.label())?
-    };
-    let has_ambient = module
-        .functions
-        .iter()
-        .any(|(_, f)| f.name.as_deref() == Some("ambient"));
+    }
+    let fields = declared.fields;
+    let has_ambient = declared.has_ambient;
     assembled.push_file(
         format!("(penumbra's parameter loader for {})", file.label()),
         &generated(&fields, has_ambient, placeholder),
@@ -149,67 +93,54 @@ pub fn assemble(
 /// `Params` for a shader file that declares none.
 const PLACEHOLDER_PARAMS: &str = "struct Params {\n    penumbra_unused: u32,\n}\n";
 
-fn find_struct<'m>(module: &'m naga::Module, name: &str) -> Option<(naga::Handle<naga::Type>, &'m [naga::StructMember])> {
-    module.types.iter().find_map(|(h, t)| match &t.inner {
-        naga::TypeInner::Struct { members, .. } if t.name.as_deref() == Some(name) => {
-            Some((h, members.as_slice()))
-        }
-        _ => None,
-    })
+/// Whether `text` declares a `struct Params` (possibly empty, which WGSL
+/// itself refuses and naga reports).
+fn declares_params(text: &str) -> bool {
+    text.split("struct")
+        .skip(1)
+        .any(|rest| rest.trim_start().starts_with("Params") && rest.trim_start()[6..].trim_start().starts_with('{'))
 }
 
-/// The fields of `struct Params`, each an `f32`, `i32`, `u32` or
-/// `vec2`–`vec4<f32>`.
-fn params_fields(
-    module: &naga::Module,
-    label: &str,
-) -> Result<Vec<(String, ParamKind)>, CompileError> {
-    let Some((_, members)) = find_struct(module, "Params") else {
-        return Ok(Vec::new());
-    };
-    members
-        .iter()
-        .map(|m| {
-            use naga::{ScalarKind as K, TypeInner as T};
-            let name = m.name.clone().unwrap_or_default();
-            let kind = match &module.types[m.ty].inner {
-                T::Scalar(s) if s.width == 4 && s.kind == K::Float => Some(ParamKind::F32),
-                T::Scalar(s) if s.width == 4 && s.kind == K::Sint => Some(ParamKind::I32),
-                T::Scalar(s) if s.width == 4 && s.kind == K::Uint => Some(ParamKind::U32),
-                T::Vector { size, scalar } if scalar.width == 4 && scalar.kind == K::Float => {
-                    Some(ParamKind::Vec(*size as u8))
-                }
-                _ => None,
-            };
-            kind.map(|k| (name.clone(), k)).ok_or_else(|| CompileError {
-                location: label.to_string(),
-                message: format!(
-                    "Params field `{name}` has a type penumbra cannot fill from a scene: use f32, i32, u32 or vec2/vec3/vec4<f32>"
-                ),
-            })
-        })
-        .collect()
+/// A shader file's reflection error as a compile error (same text).
+fn file_error(e: ShaderFileError) -> CompileError {
+    let text = e.to_string();
+    let head = e.path.display().to_string();
+    match text.strip_prefix(&head) {
+        Some(rest) => {
+            let (place, message) = rest.split_once(": ").unwrap_or(("", rest));
+            CompileError {
+                location: format!("{head}{place}"),
+                message: message.to_string(),
+            }
+        }
+        None => CompileError {
+            location: head,
+            message: e.message,
+        },
+    }
 }
 
 /// The loader of `Params` from the packed words, and the ambient call.
-fn generated(fields: &[(String, ParamKind)], has_ambient: bool, placeholder: bool) -> String {
+fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> String {
     let mut out = String::new();
     let mut at = 0u32;
     let mut args = Vec::new();
     let word = |i: u32| format!("penumbra_params[at + {i}u]");
-    for (_, kind) in fields {
+    for field in fields {
+        let kind = &field.ty;
         args.push(match kind {
-            ParamKind::F32 => format!("bitcast<f32>({})", word(at)),
-            ParamKind::I32 => format!("bitcast<i32>({})", word(at)),
-            ParamKind::U32 => word(at),
-            ParamKind::Vec(n) => {
-                let parts: Vec<String> = (0..*n as u32)
+            ParamType::F32 => format!("bitcast<f32>({})", word(at)),
+            ParamType::I32 => format!("bitcast<i32>({})", word(at)),
+            ParamType::U32 => word(at),
+            vec => {
+                let n = vec.words() as u32;
+                let parts: Vec<String> = (0..n)
                     .map(|i| format!("bitcast<f32>({})", word(at + i)))
                     .collect();
                 format!("vec{n}<f32>({})", parts.join(", "))
             }
         });
-        at += kind.words();
+        at += kind.words() as u32;
     }
     if placeholder {
         args.push("0u".into());
@@ -235,17 +166,17 @@ fn generated(fields: &[(String, ParamKind)], has_ambient: bool, placeholder: boo
 /// file's `Params` fields (the JSON types `phong` and `blinn_phong` map to
 /// these files and keep their fields).
 pub fn phong_words(
-    fields: &[(String, ParamKind)],
+    fields: &[ParamField],
     p: &crate::scene::Phong,
     label: &str,
 ) -> Result<Vec<u32>, CompileError> {
     let mut words = Vec::new();
-    for (name, kind) in fields {
+    for ParamField { name, ty: kind } in fields {
         let value: Vec<f32> = match (name.as_str(), kind) {
-            ("ambient", ParamKind::Vec(3)) => p.ambient.to_array().to_vec(),
-            ("diffuse", ParamKind::Vec(3)) => p.diffuse.to_array().to_vec(),
-            ("specular", ParamKind::Vec(3)) => p.specular.to_array().to_vec(),
-            ("shininess", ParamKind::F32) => vec![p.shininess],
+            ("ambient", ParamType::Vec3) => p.ambient.to_array().to_vec(),
+            ("diffuse", ParamType::Vec3) => p.diffuse.to_array().to_vec(),
+            ("specular", ParamType::Vec3) => p.specular.to_array().to_vec(),
+            ("shininess", ParamType::F32) => vec![p.shininess],
             _ => {
                 return Err(CompileError {
                     location: label.to_string(),
@@ -269,7 +200,7 @@ pub struct Program {
     /// Its text as last read.
     pub text: String,
     /// Its `Params` fields.
-    pub fields: Vec<(String, ParamKind)>,
+    pub fields: Vec<ParamField>,
 }
 
 /// The shade programs of a scene and every leaf shader's parameters.
@@ -299,6 +230,7 @@ impl Materials {
             let file = match sh {
                 Shader::Phong(_) => ProgramFile::Builtin("shading/phong.wgsl"),
                 Shader::BlinnPhong(_) => ProgramFile::Builtin("shading/blinn_phong.wgsl"),
+                Shader::Wgsl(w) => ProgramFile::User(w.path.clone()),
                 Shader::Checker(_) => {
                     m.leaves.push(None);
                     continue;
@@ -321,6 +253,17 @@ impl Materials {
             let words = match sh {
                 Shader::Phong(p) | Shader::BlinnPhong(p) => {
                     phong_words(&m.programs[program].fields, p, &label)?
+                }
+                Shader::Wgsl(w) => {
+                    // The scene's values were checked against the Params the
+                    // file had when it was loaded.
+                    if w.fields != m.programs[program].fields {
+                        return Err(CompileError {
+                            location: label,
+                            message: "its Params changed since the scene was loaded: save the scene file to reload it".into(),
+                        });
+                    }
+                    w.words()
                 }
                 Shader::Checker(_) => Vec::new(),
             };
@@ -345,10 +288,10 @@ mod tests {
             assert_eq!(
                 names,
                 [
-                    ("ambient", ParamKind::Vec(3)),
-                    ("diffuse", ParamKind::Vec(3)),
-                    ("specular", ParamKind::Vec(3)),
-                    ("shininess", ParamKind::F32)
+                    ("ambient", ParamType::Vec3),
+                    ("diffuse", ParamType::Vec3),
+                    ("specular", ParamType::Vec3),
+                    ("shininess", ParamType::F32)
                 ]
             );
             assert!(s.has_ambient);
@@ -380,15 +323,15 @@ mod tests {
         let file = ProgramFile::User("toon.wgsl".into());
         let text = "struct Params { a: f32, b: i32, c: u32, d: vec2<f32>, e: vec4<f32> }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    return vec3<f32>(p.a + f32(p.b) + f32(p.c) + p.d.x + p.e.w);\n}\n";
         let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
-        let kinds: Vec<_> = s.fields.iter().map(|(_, k)| *k).collect();
+        let kinds: Vec<_> = s.fields.iter().map(|f| f.ty).collect();
         assert_eq!(
             kinds,
             [
-                ParamKind::F32,
-                ParamKind::I32,
-                ParamKind::U32,
-                ParamKind::Vec(2),
-                ParamKind::Vec(4)
+                ParamType::F32,
+                ParamType::I32,
+                ParamType::U32,
+                ParamType::Vec2,
+                ParamType::Vec4
             ]
         );
         let loader = s.assembled.text.rsplit("fn penumbra_load_params").next().unwrap();
