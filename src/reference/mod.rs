@@ -286,6 +286,7 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
                 render,
                 ..Timings::default()
             },
+            ..RenderStats::default()
         },
     }
 }

@@ -136,6 +136,15 @@ pub struct RenderStats {
     /// Bytes of the BVH on the GPU (the records' texel image, padding
     /// included, and the primitive references).
     pub bvh_bytes: usize,
+    /// The frame reused the hit records (and shadow-ray visibility) of the
+    /// previous render at the same view, size and sample: only the shade
+    /// and gather stages ran, and no rays were traced.
+    pub hits_reused: bool,
+    /// Tiles the image was rendered in, and the bytes of stage memory
+    /// (hit records, colour sums, queued light samples) one tile takes.
+    pub tiles: usize,
+    /// See [`RenderStats::tiles`].
+    pub stage_bytes: u64,
 }
 
 impl RenderStats {
@@ -1168,6 +1177,9 @@ impl Renderer {
                     bvh_nodes: scene.bvh_nodes,
                     bvh_depth: scene.bvh_depth,
                     bvh_bytes: scene.bvh_bytes,
+                    hits_reused: reuse,
+                    tiles: tiles.len(),
+                    stage_bytes: plan.bytes(),
                     timings: Timings {
                         shader_compile,
                         pipeline_creation,
