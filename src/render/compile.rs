@@ -640,11 +640,11 @@ mod tests {
                 ],
             ),
             (
-                &[("@binding(3) var triangles", "@binding(14) var triangles")],
+                &[("@binding(3) var triangles", "@binding(19) var triangles")],
                 [
                     "triangle.wgsl:",
                     "`triangles`",
-                    "@binding(14)",
+                    "@binding(19)",
                     "texel image",
                     "binds nothing",
                 ],
