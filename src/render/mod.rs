@@ -388,6 +388,10 @@ pub struct Renderer {
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
     traversal_generation: u64,
+    /// Set by a successful [`Renderer::reload_shaders`], cleared by an
+    /// upload: renders may then reuse the hit records they find (every other
+    /// render traces its rays, and counts them).
+    reuse_hits: bool,
     uploads: u64,
     stage_memory: u64,
     shaders: ShaderSource,
@@ -432,6 +436,7 @@ impl Renderer {
             shade_pipelines: HashMap::new(),
             stage_buffers: Vec::new(),
             traversal_generation: 0,
+            reuse_hits: false,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             shaders: opts.shaders.clone(),
@@ -710,6 +715,7 @@ impl Renderer {
     }
 
     fn upload_inner(&mut self, scene: &Scene, image: bool) -> Result<UploadedScene, RenderError> {
+        self.reuse_hits = false;
         let (width, height) = (scene.camera.width, scene.camera.height);
         // Parts check their own band's buffer (render_part).
         self.check_size(width, if image { height } else { 1 })?;
@@ -1012,7 +1018,9 @@ impl Renderer {
             features,
             kernel: key_kernel,
         };
-        let reuse = reusable && self.stage_buffers[kept].holds.as_ref() == Some(&key(first_pass));
+        let reuse = self.reuse_hits
+            && reusable
+            && self.stage_buffers[kept].holds.as_ref() == Some(&key(first_pass));
         let holds = (reusable).then(|| key(first_pass));
         // Until this render completes, the buffers hold no whole frame.
         self.stage_buffers[kept].holds = None;

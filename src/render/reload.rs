@@ -26,7 +26,9 @@ impl Renderer {
     /// `scene` needs whose files changed (the scene upload is kept; hit
     /// records are kept too when only shade pipelines changed). On failure
     /// the pipelines that failed keep their last good versions, so the next
-    /// render still works.
+    /// render still works. After a successful reload, renders of `scene` at
+    /// the size, seed and sample of a previous render reuse its hit records
+    /// when no stage before shading changed ([`super::RenderStats::hits_reused`]).
     pub fn reload_shaders(
         &mut self,
         scene: &mut UploadedScene,
@@ -47,15 +49,21 @@ impl Renderer {
                 }));
             }
         }
+        self.reuse_hits = false;
         let old = std::mem::replace(&mut scene.materials, materials);
         let compiled = self.frame_pipelines(scene, scene.features, kernel, true);
         match compiled {
-            Ok(c) => Ok(ReloadReport {
+            Ok(c) => {
+                // The next renders of this upload may reuse their hits (the
+                // key keeps them from doing so if a traversal stage changed).
+                self.reuse_hits = true;
+                Ok(ReloadReport {
                 recompiled: c.names,
                 shader_compile: c.naga,
                 pipeline_creation: c.pipeline,
                 driver_compile: c.driver,
-            }),
+                })
+            }
             Err(e) => {
                 scene.materials = old;
                 Err(e)
