@@ -722,15 +722,15 @@ fn part_specialise(args: &Args) -> anyhow::Result<SpecialisePart> {
     let features = bunny.features();
     let mut out = SpecialisePart {
         specialised: KernelCompile {
-            spirv_bytes: src.compile(&features, &spec)?.len() * 4,
+            spirv_bytes: src.compile_frame(&features, &spec)?.len() * 4,
             ..Default::default()
         },
         general: KernelCompile {
-            spirv_bytes: src.compile(&features, &general)?.len() * 4,
+            spirv_bytes: src.compile_frame(&features, &general)?.len() * 4,
             ..Default::default()
         },
         text: KernelCompile {
-            spirv_bytes: src.compile(&features, &text)?.len() * 4,
+            spirv_bytes: src.compile_frame(&features, &text)?.len() * 4,
             ..Default::default()
         },
         ..Default::default()
@@ -795,7 +795,7 @@ fn part_cpu(args: &Args) -> anyhow::Result<CpuPart> {
     let bunny = meshes::bunny_scene(&root())?;
     let mut gpu_scene = GpuScene::new(&bunny);
     gpu_scene.build_bvh();
-    let cpu = cpu::CpuScene::new(&gpu_scene).map_err(anyhow::Error::msg)?;
+    let cpu = cpu::CpuScene::new(&gpu_scene, &bunny.shaders).map_err(anyhow::Error::msg)?;
     // The port implements the seminar's u,v-first Möller–Trumbore.
     let k = kernel(Accel::Bvh, TriangleTest::UvFirst);
     let up = upload(&mut r, &bunny, k)?;

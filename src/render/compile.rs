@@ -233,6 +233,22 @@ impl Assembled {
             .map_err(|e| self.error_at(e.location(&self.text), e.message().to_string()))
     }
 
+    /// Compiles every engine stage of a frame ([`super::stages::Stage::FRAME`])
+    /// from this one text and joins their SPIR-V words (tools that measure
+    /// or fuzz the compile; the renderer compiles each stage from its own
+    /// files).
+    pub fn compile_frame(
+        &self,
+        features: &Features,
+        kernel: &KernelOptions,
+    ) -> Result<Vec<u32>, CompileError> {
+        let mut words = Vec::new();
+        for stage in super::stages::Stage::FRAME {
+            words.extend(self.compile_entry(features, kernel, stage.entry_point())?);
+        }
+        Ok(words)
+    }
+
     /// Compiles entry point `entry` (the render kernel or the ray queries).
     /// naga reports bad WGSL as errors, but can panic on some inputs; such a
     /// panic becomes a [`CompileError`] too, so no shader file crashes the
@@ -549,15 +565,9 @@ pub fn checkout_shader_dir() -> Option<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::stages::Stage;
 
-    /// Every stage of a frame compiled from one module; their words, joined.
     fn compile(src: &Assembled, f: &Features, k: &KernelOptions) -> Result<Vec<u32>, CompileError> {
-        let mut words = Vec::new();
-        for stage in Stage::FRAME {
-            words.extend(src.compile_entry(f, k, stage.entry_point())?);
-        }
-        Ok(words)
+        src.compile_frame(f, k)
     }
 
     #[test]
@@ -713,8 +723,7 @@ mod tests {
         let broken = ShaderSource::Directory(dir.path().to_path_buf())
             .assemble()
             .unwrap();
-        let err = compile(&broken, &Features::default(), &KernelOptions::default())
-            .unwrap_err();
+        let err = compile(&broken, &Features::default(), &KernelOptions::default()).unwrap_err();
         let want_line = include_str!("../../shaders/lights.wgsl")
             .lines()
             .position(|l| l.contains("let dist = sqrt(dist2);"))

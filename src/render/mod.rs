@@ -556,7 +556,11 @@ impl Renderer {
         let t0 = Instant::now();
         let assembled = self.shaders.assemble_stage(stage)?;
         let hash = text_hash(&[&assembled.text]);
-        if self.stage_pipelines.get(&key).is_some_and(|c| c.hash == hash) {
+        if self
+            .stage_pipelines
+            .get(&key)
+            .is_some_and(|c| c.hash == hash)
+        {
             return Ok(Compiled::default());
         }
         let spirv = assembled.compile_entry(&features, &kernel, stage.entry_point())?;
@@ -646,9 +650,8 @@ impl Renderer {
         let ctx = &self.context;
         let px = plan.pixels();
         let entries = px * plan.chunk as u64;
-        let storage = |label: &str, bytes: u64| {
-            ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16))
-        };
+        let storage =
+            |label: &str, bytes: u64| ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16));
         self.stage_buffers.push(StageBuffers {
             plan,
             hits: storage("hit records", px * tiles::HIT_RECORD_BYTES)?,

@@ -58,10 +58,10 @@ impl Renderer {
                 // key keeps them from doing so if a traversal stage changed).
                 self.reuse_hits = true;
                 Ok(ReloadReport {
-                recompiled: c.names,
-                shader_compile: c.naga,
-                pipeline_creation: c.pipeline,
-                driver_compile: c.driver,
+                    recompiled: c.names,
+                    shader_compile: c.naga,
+                    pipeline_creation: c.pipeline,
+                    driver_compile: c.driver,
                 })
             }
             Err(e) => {

@@ -96,9 +96,10 @@ const PLACEHOLDER_PARAMS: &str = "struct Params {\n    penumbra_unused: u32,\n}\
 /// Whether `text` declares a `struct Params` (possibly empty, which WGSL
 /// itself refuses and naga reports).
 fn declares_params(text: &str) -> bool {
-    text.split("struct")
-        .skip(1)
-        .any(|rest| rest.trim_start().starts_with("Params") && rest.trim_start()[6..].trim_start().starts_with('{'))
+    text.split("struct").skip(1).any(|rest| {
+        rest.trim_start().starts_with("Params")
+            && rest.trim_start()[6..].trim_start().starts_with('{')
+    })
 }
 
 /// A shader file's reflection error as a compile error (same text).
@@ -297,11 +298,7 @@ mod tests {
             assert!(s.has_ambient);
             let words = s
                 .assembled
-                .compile_entry(
-                    &Default::default(),
-                    &Default::default(),
-                    SHADE_ENTRY_POINT,
-                )
+                .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
                 .unwrap();
             assert_eq!(words[0], 0x0723_0203);
         }
@@ -334,8 +331,16 @@ mod tests {
                 ParamType::Vec4
             ]
         );
-        let loader = s.assembled.text.rsplit("fn penumbra_load_params").next().unwrap();
-        assert!(loader.contains("vec4<f32>(bitcast<f32>(penumbra_params[at + 5u])"), "{loader}");
+        let loader = s
+            .assembled
+            .text
+            .rsplit("fn penumbra_load_params")
+            .next()
+            .unwrap();
+        assert!(
+            loader.contains("vec4<f32>(bitcast<f32>(penumbra_params[at + 5u])"),
+            "{loader}"
+        );
         s.assembled
             .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
             .unwrap();

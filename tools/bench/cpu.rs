@@ -26,9 +26,10 @@
 
 use glam::{IVec3, Vec3};
 use penumbra::render::layout::{
-    node_bounds_f32, GpuScene, Light, Plane, ShaderNode, Triangle, VertexNormals,
-    LIGHT_DIRECTIONAL, NO_NORMALS, SHADER_BLINN_PHONG, SHADER_CHECKER, SHADER_PHONG,
+    node_bounds_f32, GpuScene, Light, Plane, Triangle, VertexNormals, LIGHT_DIRECTIONAL,
+    NO_NORMALS, SHADER_CHECKER,
 };
+use penumbra::scene::{Phong, Shader};
 use rayon::prelude::*;
 
 const FAR: f32 = 3.0e38;
@@ -49,7 +50,7 @@ pub struct CpuScene {
     triangles: Vec<Triangle>,
     normals: Vec<VertexNormals>,
     lights: Vec<Light>,
-    shaders: Vec<ShaderNode>,
+    shaders: Vec<(bool, Phong)>,
     nodes: Vec<Node>,
     prims: Vec<u32>,
 }
@@ -119,7 +120,7 @@ fn v3(a: [f32; 3]) -> Vec3 {
 impl CpuScene {
     /// Takes a laid-out scene whose BVH has been built; errors for features
     /// the port does not have.
-    pub fn new(g: &GpuScene) -> Result<CpuScene, String> {
+    pub fn new(g: &GpuScene, shaders: &[Shader]) -> Result<CpuScene, String> {
         if !g.spheres.is_empty() {
             return Err("the CPU port has no spheres".into());
         }
@@ -129,6 +130,15 @@ impl CpuScene {
         if g.shaders.iter().any(|s| s.kind == SHADER_CHECKER) {
             return Err("the CPU port has no checker shader".into());
         }
+        // shaders/shading/phong.wgsl and blinn_phong.wgsl: (Blinn?, Phong).
+        let shaders = shaders
+            .iter()
+            .map(|s| match s {
+                Shader::Phong(p) => Ok((false, *p)),
+                Shader::BlinnPhong(p) => Ok((true, *p)),
+                _ => Err("the CPU port has only the Phong and Blinn-Phong shaders".to_string()),
+            })
+            .collect::<Result<Vec<_>, String>>()?;
         if g.bvh_nodes.is_empty() && !g.triangles.is_empty() {
             return Err("build the BVH first (GpuScene::build_bvh)".into());
         }
@@ -157,7 +167,7 @@ impl CpuScene {
             triangles: g.triangles.clone(),
             normals: g.vertex_normals.clone(),
             lights: g.lights.clone(),
-            shaders: g.shaders.clone(),
+            shaders,
             nodes,
             prims: bvh.prim_refs(g.triangles.len()),
         })
@@ -466,12 +476,12 @@ impl CpuScene {
 
     // shaders/shading/shader.wgsl
     fn shade(&self, ray: Ray, hit: &Hit, shadow_rays: &mut u64, steps: &mut Steps) -> Vec3 {
-        let node = &self.shaders[hit.shader as usize];
+        let (blinn, node) = &self.shaders[hit.shader as usize];
         let n = hit.shading_normal;
         let v = -ray.dir;
         let mut colour = Vec3::ZERO;
         for light in &self.lights {
-            colour += v3(node.ambient) * v3(light.ambient);
+            colour += node.ambient * v3(light.ambient);
             // Directional: towards the light, unbounded, no falloff.
             let l = -v3(light.direction);
             let (distance, falloff) = (FAR, 1.0f32);
@@ -485,16 +495,15 @@ impl CpuScene {
             if self.occluded(hit, l, distance, steps) {
                 continue;
             }
-            let lobe = if node.kind == SHADER_BLINN_PHONG {
+            let lobe = if *blinn {
                 blinn_phong_lobe(n, l, v, node.shininess)
-            } else if node.kind == SHADER_PHONG {
-                phong_lobe(n, l, v, node.shininess)
             } else {
-                0.0
+                phong_lobe(n, l, v, node.shininess)
             };
             colour += falloff
-                * (v3(node.diffuse) * v3(light.diffuse) * ln
-                    + v3(node.specular) * v3(light.specular) * lobe);
+                * light.intensity
+                * (node.diffuse * v3(light.diffuse) * ln
+                    + node.specular * v3(light.specular) * lobe);
         }
         colour
     }

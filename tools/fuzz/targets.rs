@@ -159,7 +159,7 @@ impl Workspace {
                 judge::start_case();
                 result = penumbra::panics::catch(|| {
                     kernel
-                        .compile(&self.features, &KernelOptions::default())
+                        .compile_frame(&self.features, &KernelOptions::default())
                         .map(|_| ())
                         .map_err(|e| e.to_string())
                 });
