@@ -1,0 +1,484 @@
+//! User shaders (WGSL files, issue 13) rendered end to end: scenes are
+//! written as JSON with their shader files into a temporary folder and go
+//! through the real loader, then through the GPU renderer. Every expected
+//! colour is computed here on the host, in f64, from the shader's formula and
+//! the exact primary ray of the pixel, never from an earlier render.
+//!
+//! Tolerances (checked per channel):
+//! - Colours that are products and sums of parameters and light colours
+//!   only (ambient terms, constants, encoded parameters) are exact or
+//!   within a few f32 roundings: `EXACT` = 0 or `SUM_TOL` = 1e-6 for values
+//!   below 2.
+//! - Colours that depend on the hit point (a point light's direction and
+//!   1/d² falloff, `to_eye`, `position`) carry the GPU's f32 error of the
+//!   primary ray and of the plane intersection: the ray direction is good to
+//!   a few 1e-7 (relative), which moves the hit point by about
+//!   t·1e-7/cos θ ≈ 1e-6 at the distances (t < 6) and view angles (cos θ >
+//!   0.5) of these scenes; 1/d² doubles the relative error. `F32_TOL` =
+//!   2e-5 is about 10× that estimate (~160 ulps at 1.0), and the maximum
+//!   error measured on lavapipe is reported in the failure messages. A
+//!   formula error (a missing factor, a wrong vector, a camera-absolute
+//!   position) changes colours by far more.
+
+mod support;
+
+use std::path::Path;
+
+use glam::DVec3;
+use penumbra::loaders::{load_scene, LoadOptions};
+use penumbra::render::Image;
+use serde_json::{json, Value};
+
+/// Exact: a value copied or multiplied by 1.0 in f32.
+const EXACT: f64 = 0.0;
+/// Sums of a few f32 products of magnitude < 2.
+const SUM_TOL: f64 = 1e-6;
+/// Values computed from the f32 hit point (see the module comment).
+const F32_TOL: f64 = 2e-5;
+
+/// A perspective look-at camera, as `scenes/README.md` defines it.
+#[derive(Clone, Copy)]
+struct Cam {
+    eye: DVec3,
+    look_at: DVec3,
+    fov: f64,
+    w: u32,
+    h: u32,
+}
+
+impl Cam {
+    /// The primary ray through the centre of pixel (x, y): origin and unit
+    /// direction (up is +Y).
+    fn ray(&self, x: u32, y: u32) -> (DVec3, DVec3) {
+        let back = (self.eye - self.look_at).normalize();
+        let right = DVec3::Y.cross(back).normalize();
+        let up = back.cross(right);
+        let half_h = (self.fov.to_radians() / 2.0).tan();
+        let half_w = half_h * self.w as f64 / self.h as f64;
+        let sx = ((x as f64 + 0.5) / self.w as f64 * 2.0 - 1.0) * half_w;
+        let sy = (1.0 - (y as f64 + 0.5) / self.h as f64 * 2.0) * half_h;
+        (self.eye, (-back + sx * right + sy * up).normalize())
+    }
+
+    fn json(&self) -> Value {
+        json!({
+            "position": self.eye.to_array(),
+            "look_at": self.look_at.to_array(),
+            "up": [0, 1, 0],
+            "fov": self.fov,
+            "width": self.w,
+            "height": self.h
+        })
+    }
+
+    /// Where the ray of pixel (x, y) meets the plane y = 0 (world space).
+    fn on_ground(&self, x: u32, y: u32) -> DVec3 {
+        let (o, d) = self.ray(x, y);
+        assert!(d.y < -0.1, "pixel ({x}, {y}) must look down at the ground");
+        o + (-o.y / d.y) * d
+    }
+
+    fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (0..self.h).flat_map(move |y| (0..self.w).map(move |x| (x, y)))
+    }
+}
+
+/// Looking down at the ground plane y = 0 steeply enough that every pixel
+/// sees it (the top row looks about 30° below the horizon).
+const GROUND_CAM: Cam = Cam {
+    eye: DVec3::new(0.3, 4.0, 2.0),
+    look_at: DVec3::new(0.0, 0.0, -0.5),
+    fov: 50.0,
+    w: 48,
+    h: 36,
+};
+
+const BACKGROUND: [f64; 3] = [0.1, 0.2, 0.3];
+
+/// A scene of the ground plane with `shader`, seen by `cam`.
+fn ground_scene(cam: &Cam, shaders: Value, shader: &str, lights: Value) -> Value {
+    json!({
+        "camera": cam.json(),
+        "background": BACKGROUND,
+        "shaders": shaders,
+        "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": shader}],
+        "lights": lights
+    })
+}
+
+/// Writes `scene` and the shader `files` (name, text) to a fresh folder,
+/// loads it with the JSON loader and renders it.
+fn render(scene: &Value, files: &[(&str, &str)]) -> Image {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).expect("write shader");
+    }
+    let path = dir.path().join("scene.json");
+    std::fs::write(&path, serde_json::to_string_pretty(scene).unwrap()).unwrap();
+    let loaded = load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    support::render(&loaded.scene).image
+}
+
+/// Checks `want` at every pixel where it gives a colour; all are hits.
+/// Returns the largest error seen.
+#[track_caller]
+fn check(img: &Image, cam: &Cam, tol: f64, mut want: impl FnMut(u32, u32) -> Option<DVec3>) -> f64 {
+    let mut worst = 0.0f64;
+    let mut judged = 0;
+    for (x, y) in cam.pixels() {
+        let Some(c) = want(x, y) else { continue };
+        let got = img.at(x, y);
+        assert_eq!(got[3], 1.0, "pixel ({x}, {y}) should be a hit");
+        for k in 0..3 {
+            let err = (got[k] as f64 - c[k]).abs();
+            worst = worst.max(err);
+            assert!(
+                err <= tol,
+                "pixel ({x}, {y}) channel {k}: got {:?}, want {c:?} (tol {tol})",
+                &got[..3]
+            );
+        }
+        judged += 1;
+    }
+    assert!(judged > 100, "only {judged} pixels judged");
+    worst
+}
+
+/// `p.base * l.intensity * dot(l.to_light, s.normal)`: the issue's example.
+const LAMBERT: &str = "\
+// The seminar's diffuse term with the light's colour left out.
+struct Params {
+    base: vec3<f32>,
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return p.base * l.intensity * dot(l.to_light, s.normal);
+}
+";
+
+const BASE: [f64; 3] = [0.9, 0.3, 0.2];
+
+fn lambert_scene(light: Value) -> Value {
+    ground_scene(
+        &GROUND_CAM,
+        json!({"lambert": {"type": "wgsl", "file": "lambert.wgsl", "params": {"base": BASE}}}),
+        "lambert",
+        json!([light]),
+    )
+}
+
+#[test]
+fn a_user_shader_renders_its_formula_under_a_directional_light() {
+    // The light travels along `dir`: to_light is at 60° from the normal.
+    let theta = 60f64.to_radians();
+    let dir = DVec3::new(-theta.sin() * 0.6, -theta.cos(), -theta.sin() * 0.8);
+    let intensity = 0.75;
+    let light = json!({"type": "directional", "direction": dir.to_array(), "intensity": intensity,
+                       "ambient": [0.2, 0.2, 0.2], "diffuse": [0.1, 0.5, 1.0]});
+    let img = render(&lambert_scene(light), &[("lambert.wgsl", LAMBERT)]);
+    // cos 60° = 0.5 everywhere on the plane; the light's colours and
+    // ambient do not enter this shader, and there is no `ambient`.
+    let want = DVec3::from_array(BASE) * intensity * 0.5;
+    check(&img, &GROUND_CAM, SUM_TOL, |_, _| Some(want));
+}
+
+#[test]
+fn a_user_shader_renders_its_formula_under_a_point_light() {
+    let q = DVec3::new(0.7, 1.5, -0.8);
+    let intensity = 5.0;
+    let light = json!({"type": "point", "position": q.to_array(), "intensity": intensity,
+                       "ambient": [0.2, 0.2, 0.2]});
+    let img = render(&lambert_scene(light), &[("lambert.wgsl", LAMBERT)]);
+    let worst = check(&img, &GROUND_CAM, F32_TOL, |x, y| {
+        let p = GROUND_CAM.on_ground(x, y);
+        let to_light = q - p;
+        let falloff = 1.0 / to_light.length_squared();
+        let cos = to_light.normalize().dot(DVec3::Y);
+        Some(DVec3::from_array(BASE) * (intensity * falloff * cos))
+    });
+    eprintln!("point light: largest error {worst:e}");
+    // The pixels differ: the falloff and angle vary over the plane.
+    assert_ne!(img.at(0, 0), img.at(GROUND_CAM.w - 1, GROUND_CAM.h - 1));
+}
+
+/// Shows `to_eye` (mode 0) or `position` (mode 1) as the colour.
+const PROBE: &str = "\
+struct Params {
+    mode: u32,
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    if p.mode == 0u {
+        return s.to_eye;
+    }
+    return s.position;
+}
+";
+
+#[test]
+fn to_eye_and_position_reach_the_shader() {
+    let cam = Cam {
+        eye: DVec3::new(1.5, 3.0, 4.0),
+        look_at: DVec3::new(0.5, 0.0, 0.0),
+        ..GROUND_CAM
+    };
+    // One sample straight down: `shade` runs once per pixel.
+    let lights = json!([{"type": "directional", "direction": [0, -1, 0], "intensity": 1}]);
+    let probe = |mode: u32| {
+        let shaders =
+            json!({"probe": {"type": "wgsl", "file": "probe.wgsl", "params": {"mode": mode}}});
+        render(
+            &ground_scene(&cam, shaders, "probe", lights.clone()),
+            &[("probe.wgsl", PROBE)],
+        )
+    };
+    // to_eye is the unit vector from the point back to the camera.
+    let worst = check(&probe(0), &cam, F32_TOL, |x, y| Some(-cam.ray(x, y).1));
+    eprintln!("to_eye: largest error {worst:e}");
+    // The position is camera-relative: the camera sits at the origin.
+    let img = probe(1);
+    let worst = check(&img, &cam, F32_TOL, |x, y| {
+        Some(cam.on_ground(x, y) - cam.eye)
+    });
+    eprintln!("position: largest error {worst:e}");
+    // On the plane y = 0 every point is at height −eye.y relative to the camera.
+    for (x, y) in [(0, 0), (cam.w / 2, cam.h / 2), (cam.w - 1, cam.h - 1)] {
+        assert!((img.at(x, y)[1] as f64 + cam.eye.y).abs() <= F32_TOL);
+    }
+}
+
+/// An `ambient` term (k · light ambient) and a `shade` that adds nothing.
+const AMBIENT: &str = "\
+struct Params {
+    k: vec3<f32>,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.k * light_ambient;
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+";
+
+/// No `ambient`: only `shade`, which adds nothing either.
+const NO_AMBIENT: &str = "\
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+";
+
+#[test]
+fn ambient_is_added_once_per_light_and_a_file_without_it_adds_nothing() {
+    // A directional light from above, a point light below the ground (it
+    // reaches no point, yet its ambient counts), a rectangle of 100 samples
+    // (two chunks of tiles::MAX_CHUNK: ambient must still count once) and a
+    // sphere light of 16 samples.
+    let ambients = [
+        [0.05, 0.1, 0.15],
+        [0.2, 0.01, 0.03],
+        [0.125, 0.25, 0.0625],
+        [0.07, 0.02, 0.3],
+    ];
+    let lights = json!([
+        {"type": "directional", "direction": [0.2, -1, 0.1], "ambient": ambients[0]},
+        {"type": "point", "position": [0, -2, 0], "intensity": 3, "ambient": ambients[1]},
+        {"type": "rect", "corner": [-1, 3, -1], "edge1": [0, 0, 2], "edge2": [2, 0, 0],
+         "intensity": 4, "samples": 100, "ambient": ambients[2]},
+        {"type": "sphere", "center": [1, 2, 0], "radius": 0.3, "intensity": 2, "samples": 16,
+         "ambient": ambients[3]}
+    ]);
+    let k = [0.5, 1.5, 0.75];
+    let shaders = json!({"amb": {"type": "wgsl", "file": "ambient.wgsl", "params": {"k": k}}});
+    let img = render(
+        &ground_scene(&GROUND_CAM, shaders, "amb", lights.clone()),
+        &[("ambient.wgsl", AMBIENT)],
+    );
+    let sum = ambients
+        .iter()
+        .fold(DVec3::ZERO, |acc, a| acc + DVec3::from_array(*a));
+    let want = DVec3::from_array(k) * sum;
+    check(&img, &GROUND_CAM, SUM_TOL, |_, _| Some(want));
+
+    let shaders = json!({"none": {"type": "wgsl", "file": "none.wgsl"}});
+    let img = render(
+        &ground_scene(&GROUND_CAM, shaders, "none", lights),
+        &[("none.wgsl", NO_AMBIENT)],
+    );
+    check(&img, &GROUND_CAM, EXACT, |_, _| Some(DVec3::ZERO));
+}
+
+/// A flat colour through `ambient` (light ambient 1, so exact and the same
+/// lit or in shadow).
+const FLAT: &str = "\
+struct Params {
+    base: vec3<f32>,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.base * light_ambient;
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+";
+
+/// Another flat colour, from two parameters of another file.
+const TINTED: &str = "\
+struct Params {
+    tint: vec3<f32>,
+    gain: f32,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.tint * p.gain * light_ambient;
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+";
+
+#[test]
+fn materials_share_a_file_and_a_checker_selects_user_shaders() {
+    let cam = GROUND_CAM;
+    let (warm, cold, tint, gain) = ([1.0, 0.5, 0.25], [0.0, 0.5, 1.0], [0.5, 0.25, 0.75], 2.0);
+    let center = DVec3::new(0.3, 0.6, -0.6);
+    let radius = 0.6;
+    let scene = json!({
+        "camera": cam.json(),
+        "background": BACKGROUND,
+        "shaders": {
+            "warm": {"type": "wgsl", "file": "flat.wgsl", "params": {"base": warm}},
+            "cold": {"type": "wgsl", "file": "flat.wgsl", "params": {"base": cold}},
+            "tinted": {"type": "wgsl", "file": "tinted.wgsl", "params": {"tint": tint, "gain": gain}},
+            "board": {"type": "checker", "size": 1.0, "even": "warm", "odd": "tinted"}
+        },
+        "objects": [
+            {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "board"},
+            {"type": "sphere", "center": center.to_array(), "radius": radius, "shader": "cold"}
+        ],
+        "lights": [{"type": "directional", "direction": [0.3, -1, -0.2], "ambient": [1, 1, 1]}]
+    });
+    let img = render(&scene, &[("flat.wgsl", FLAT), ("tinted.wgsl", TINTED)]);
+    let odd = DVec3::from_array(tint) * gain;
+    let mut seen = [0; 3];
+    check(&img, &cam, EXACT, |x, y| {
+        let (o, d) = cam.ray(x, y);
+        // The sphere first, off its silhouette.
+        let f = center - o;
+        let along = f.dot(d);
+        let miss = (f - along * d).length() - radius;
+        if miss.abs() < 1e-3 {
+            return None;
+        }
+        if miss < 0.0 {
+            seen[2] += 1;
+            return Some(DVec3::from_array(cold));
+        }
+        // The ground, off the cell boundaries; looked up just below the
+        // surface (y < 0, so floor(y) = −1).
+        let p = cam.on_ground(x, y);
+        let near = |v: f64| (v - v.round()).abs() < 1e-3;
+        if near(p.x) || near(p.z) {
+            return None;
+        }
+        let cell = p.x.floor() as i64 - 1 + p.z.floor() as i64;
+        if cell.rem_euclid(2) == 0 {
+            seen[0] += 1;
+            Some(DVec3::from_array(warm))
+        } else {
+            seen[1] += 1;
+            Some(odd)
+        }
+    });
+    assert!(
+        seen.iter().all(|&n| n > 50),
+        "pixels per colour (even, odd, sphere): {seen:?}"
+    );
+}
+
+/// Encodes every kind of parameter into the colour (through `ambient`,
+/// with light ambient 1): `show` picks which.
+const ENCODE: &str = "\
+struct Params {
+    i: i32,
+    u: u32,
+    f: f32,
+    v2: vec2<f32>,
+    v4: vec4<f32>,
+    show: u32,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    var c: vec3<f32>;
+    switch p.show {
+        case 0u: { c = vec3<f32>(f32(p.i), f32(p.u), p.f); }
+        case 1u: { c = vec3<f32>(p.v2, select(0.0, 1.0, p.i < 0)); }
+        case 2u: { c = p.v4.xyz; }
+        default: { c = vec3<f32>(p.v4.w, select(0.0, 1.0, p.u > 3000000000u), f32(p.show)); }
+    }
+    return c * light_ambient;
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}
+";
+
+#[test]
+fn i32_u32_vec2_and_vec4_params_reach_the_shader() {
+    // Values that f32 holds exactly: -2e9 = -1953125·2^10, 4e9 =
+    // 15625000·2^8 (above i32::MAX, so a u32 read as i32 would show).
+    let (i, u, f) = (-2_000_000_000i64, 4_000_000_000u64, 0.375);
+    let (v2, v4) = ([0.25, -1.5], [1.0, 2.0, -3.0, 0.125]);
+    let lights = json!([{"type": "directional", "direction": [0, -1, 0], "ambient": [1, 1, 1]}]);
+    let expect = [
+        [i as f64, u as f64, f],
+        [v2[0], v2[1], 1.0],
+        [v4[0], v4[1], v4[2]],
+        [v4[3], 1.0, 3.0],
+    ];
+    for (show, want) in expect.iter().enumerate() {
+        let shaders = json!({"enc": {"type": "wgsl", "file": "encode.wgsl", "params": {
+            "i": i, "u": u, "f": f, "v2": v2, "v4": v4, "show": show
+        }}});
+        let img = render(
+            &ground_scene(&GROUND_CAM, shaders, "enc", lights.clone()),
+            &[("encode.wgsl", ENCODE)],
+        );
+        check(&img, &GROUND_CAM, EXACT, |_, _| {
+            Some(DVec3::from_array(*want))
+        });
+    }
+}
+
+#[test]
+fn the_example_scene_loads_and_renders() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/shaders.json");
+    let opts = LoadOptions {
+        width: Some(96),
+        height: Some(54),
+        ..LoadOptions::default()
+    };
+    let loaded = load_scene(&path, &opts).unwrap_or_else(|e| panic!("{e}"));
+    // Two example user shaders, the first shared by two materials.
+    let dir = path.parent().unwrap();
+    for f in ["shaders/toon.wgsl", "shaders/normals.wgsl"] {
+        assert!(
+            loaded.files.contains(&dir.join(f)),
+            "{f}: {:?}",
+            loaded.files
+        );
+    }
+    let img = support::render(&loaded.scene).image;
+    assert_eq!((img.width, img.height), (96, 54));
+    assert!(img.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    // Most of the picture is objects, and it is not one flat colour.
+    let hits = img.pixels.iter().filter(|p| p[3] == 1.0).count();
+    assert!(hits > img.pixels.len() / 2, "{hits} hits");
+    let first = img.pixels[img.pixels.len() / 2];
+    assert!(img.pixels.iter().any(|p| p != &first));
+}
