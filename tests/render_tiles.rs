@@ -171,7 +171,7 @@ fn the_bound_holds_for_the_largest_image_the_cli_allows() {
                 let plan = TilePlan::new([side, side], samples, bound, max_buffer);
                 let why = format!("{samples} samples, bound {bound}, max buffer {max_buffer}");
                 assert!(plan.bytes() <= bound, "{why}: {} bytes", plan.bytes());
-                assert!(plan.tile[0] % 8 == 0 && plan.tile[1] % 8 == 0, "{why}");
+                assert!(plan.tile.iter().all(|t| t.is_multiple_of(8)), "{why}");
                 assert!(plan.chunk >= 1 && plan.chunk <= tiles::MAX_CHUNK, "{why}");
                 // No buffer of the plan is larger than the device allows:
                 // hit records, and queued rays (16 bytes per sample).
