@@ -247,6 +247,60 @@ fn to_eye_and_position_reach_the_shader() {
     }
 }
 
+/// Shows one more input per mode: the light's colours, both normals, the
+/// texture coordinates, the direction to the light and the intensity.
+const INPUTS: &str = "\
+struct Params {
+    mode: u32,
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    switch p.mode {
+        case 0u: { return l.diffuse; }
+        case 1u: { return l.specular; }
+        case 2u: { return s.normal; }
+        case 3u: { return s.geometric_normal; }
+        case 4u: { return vec3<f32>(s.uv, 1.0); }
+        case 5u: { return l.to_light; }
+        default: { return vec3<f32>(l.intensity); }
+    }
+}
+";
+
+#[test]
+fn the_light_colours_normals_and_uv_reach_the_shader() {
+    // The plane's normal points down, away from the camera above it: both
+    // normals reach the shader facing the viewer, (0, 1, 0), and the light
+    // from above lights it.
+    let (diffuse, specular) = ([0.25, 0.5, 1.0], [1.0, 0.75, 0.125]);
+    let dir = DVec3::new(0.3, -1.0, 0.2);
+    let intensity = 0.625;
+    let lights = json!([{"type": "directional", "direction": dir.to_array(), "intensity": intensity,
+                         "diffuse": diffuse, "specular": specular, "ambient": [0.5, 0.5, 0.5]}]);
+    let to_light = -dir.normalize();
+    let expect = [
+        (DVec3::from_array(diffuse), EXACT),
+        (DVec3::from_array(specular), EXACT),
+        (DVec3::Y, EXACT),
+        (DVec3::Y, EXACT),
+        // A plane has no texture coordinates: (0, 0).
+        (DVec3::Z, EXACT),
+        (to_light, SUM_TOL),
+        (DVec3::splat(intensity), EXACT),
+    ];
+    for (mode, (want, tol)) in expect.into_iter().enumerate() {
+        let scene = json!({
+            "camera": GROUND_CAM.json(),
+            "background": BACKGROUND,
+            "shaders": {"probe": {"type": "wgsl", "file": "inputs.wgsl", "params": {"mode": mode}}},
+            "objects": [{"type": "plane", "point": [0, 0, 0], "normal": [0, -1, 0], "shader": "probe"}],
+            "lights": lights
+        });
+        let img = render(&scene, &[("inputs.wgsl", INPUTS)]);
+        check(&img, &GROUND_CAM, tol, |_, _| Some(want));
+    }
+}
+
 /// An `ambient` term (k · light ambient) and a `shade` that adds nothing.
 const AMBIENT: &str = "\
 struct Params {
@@ -521,4 +575,95 @@ fn a_loaded_scene_renders_the_source_it_loaded() {
     check(&img, &GROUND_CAM, EXACT, |_, _| {
         Some(DVec3::from_array(base))
     });
+}
+
+/// The built-in Phong and Blinn-Phong files, read by the scene as user
+/// files: one mechanism for both, so the images agree bit for bit, with
+/// checkers, shadows, a spot light and an area light of two sample chunks.
+#[test]
+fn copies_of_the_builtin_files_render_the_builtin_images() {
+    let builtins = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/shading");
+    let phong = std::fs::read_to_string(builtins.join("phong.wgsl")).unwrap();
+    let blinn = std::fs::read_to_string(builtins.join("blinn_phong.wgsl")).unwrap();
+    let coefficients = |ka: [f64; 3], kd: [f64; 3], ks: [f64; 3], ns: f64| json!({"ambient": ka, "diffuse": kd, "specular": ks, "shininess": ns});
+    let materials = [
+        (
+            "red",
+            "phong",
+            coefficients([0.8, 0.1, 0.1], [0.8, 0.1, 0.1], [0.6, 0.6, 0.6], 20.0),
+        ),
+        (
+            "blue",
+            "blinn_phong",
+            coefficients([0.1, 0.2, 0.8], [0.1, 0.2, 0.8], [0.5, 0.5, 0.5], 8.0),
+        ),
+        (
+            "ivory",
+            "phong",
+            coefficients([0.9, 0.9, 0.8], [0.85, 0.8, 0.75], [0.1, 0.1, 0.1], 1.0),
+        ),
+        (
+            "slate",
+            "blinn_phong",
+            coefficients([0.2, 0.2, 0.25], [0.2, 0.2, 0.25], [0.2, 0.2, 0.2], 0.0),
+        ),
+    ];
+    let scene = |user: bool| {
+        let mut shaders = serde_json::Map::new();
+        for (name, kind, c) in &materials {
+            let mut s = json!({"type": kind});
+            if user {
+                s = json!({"type": "wgsl", "file": format!("{kind}.wgsl"), "params": c});
+            } else {
+                s.as_object_mut()
+                    .unwrap()
+                    .extend(c.as_object().unwrap().clone());
+            }
+            shaders.insert(name.to_string(), s);
+        }
+        shaders.insert(
+            "floor".into(),
+            json!({"type": "checker", "size": 0.75, "even": "ivory", "odd": "slate"}),
+        );
+        json!({
+            "camera": {"position": [0.5, 2.0, 5.0], "look_at": [0, 0.5, 0], "fov": 45, "width": 96, "height": 64},
+            "background": BACKGROUND,
+            "shaders": shaders,
+            "objects": [
+                {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"},
+                {"type": "sphere", "center": [-0.8, 0.7, 0], "radius": 0.7, "shader": "red"},
+                {"type": "sphere", "center": [0.9, 0.5, 0.4], "radius": 0.5, "shader": "blue"}
+            ],
+            "lights": [
+                {"type": "point", "position": [2, 3, 2], "intensity": 8, "ambient": [0.05, 0.05, 0.05],
+                 "diffuse": [1, 0.9, 0.8], "specular": [1, 1, 1]},
+                {"type": "spot", "position": [-2, 3, 1], "direction": [0.5, -1, -0.2], "inner_angle": 15,
+                 "outer_angle": 30, "intensity": 10, "diffuse": [0.5, 0.6, 1], "specular": [0.5, 0.6, 1]},
+                {"type": "rect", "corner": [-1, 3, -2], "edge1": [1.5, 0, 0], "edge2": [0, 0, 1.5],
+                 "intensity": 6, "samples": 100, "ambient": [0.02, 0.03, 0.04]}
+            ]
+        })
+    };
+    let files = [
+        ("phong.wgsl", phong.as_str()),
+        ("blinn_phong.wgsl", blinn.as_str()),
+    ];
+    let want = render(&scene(false), &[]);
+    let got = render(&scene(true), &files);
+    let bits =
+        |img: &Image| -> Vec<[u32; 4]> { img.pixels.iter().map(|p| p.map(f32::to_bits)).collect() };
+    let differ = bits(&got)
+        .iter()
+        .zip(&bits(&want))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differ, 0,
+        "{differ} pixels differ from the built-in shaders"
+    );
+    // Lit, shadowed and highlight pixels: the image is not trivial.
+    let mut reds: Vec<u32> = bits(&want).iter().map(|p| p[0]).collect();
+    reds.sort_unstable();
+    reds.dedup();
+    assert!(reds.len() > 500, "{} distinct reds", reds.len());
 }
