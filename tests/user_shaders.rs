@@ -667,3 +667,119 @@ fn copies_of_the_builtin_files_render_the_builtin_images() {
     reds.dedup();
     assert!(reds.len() > 500, "{} distinct reds", reds.len());
 }
+
+/// `shade` and `ambient` together: a Lambert term and k · light ambient.
+const LAMBERT_AMBIENT: &str = "\
+struct Params {
+    base: vec3<f32>,
+    k: vec3<f32>,
+}
+
+fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
+    return p.k * light_ambient;
+}
+
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return p.base * l.diffuse * l.intensity * dot(l.to_light, s.normal);
+}
+";
+
+/// Whether the segment from `p` to `q` passes through the sphere, and
+/// whether it passes so close to its silhouette that f32 may decide either
+/// way.
+fn blocked(p: DVec3, q: DVec3, center: DVec3, radius: f64) -> (bool, bool) {
+    let d = q - p;
+    let len = d.length();
+    let d = d / len;
+    let along = (center - p).dot(d).clamp(0.0, len);
+    let gap = (p + along * d - center).length() - radius;
+    (gap < 0.0, gap.abs() < 1e-3)
+}
+
+#[test]
+fn many_point_lights_in_three_sample_chunks_match_the_formula() {
+    // 150 point lights, one sample each: chunks of 64, 64 and 22 samples,
+    // with no sampling pattern, so every pixel is computed here exactly.
+    // Lights below the ground reach no point but add their ambient; a
+    // sphere casts their shadows.
+    let (base, k) = ([0.9, 0.6, 0.3], [0.5, 0.25, 1.0]);
+    let (center, radius) = (DVec3::new(0.0, 0.5, -0.5), 0.5);
+    struct Lamp {
+        q: DVec3,
+        intensity: f64,
+        diffuse: DVec3,
+        ambient: DVec3,
+    }
+    let lamps: Vec<Lamp> = (0..150)
+        .map(|i| {
+            let f = i as f64;
+            let angle = f * 2.399_963; // the golden angle spreads them out
+            let r = 1.0 + (f % 7.0) * 0.4;
+            let height = if i % 10 == 9 {
+                -1.0
+            } else {
+                1.5 + (f % 5.0) * 0.5
+            };
+            Lamp {
+                q: DVec3::new(r * angle.cos(), height, r * angle.sin() - 0.5),
+                intensity: 0.05 + (f % 3.0) * 0.02,
+                diffuse: DVec3::new(1.0, 0.5 + (f % 2.0) * 0.5, 0.25 + (f % 4.0) * 0.25),
+                ambient: DVec3::splat(0.001 * (f % 4.0)),
+            }
+        })
+        .collect();
+    let lights: Vec<Value> = lamps
+        .iter()
+        .map(|l| {
+            json!({"type": "point", "position": l.q.to_array(), "intensity": l.intensity,
+                   "diffuse": l.diffuse.to_array(), "ambient": l.ambient.to_array()})
+        })
+        .collect();
+    let scene = json!({
+        "camera": GROUND_CAM.json(),
+        "background": BACKGROUND,
+        "shaders": {"m": {"type": "wgsl", "file": "lambert_ambient.wgsl",
+                          "params": {"base": base, "k": k}}},
+        "objects": [
+            {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "m"},
+            {"type": "sphere", "center": center.to_array(), "radius": radius, "shader": "m"}
+        ],
+        "lights": lights
+    });
+    let img = render(&scene, &[("lambert_ambient.wgsl", LAMBERT_AMBIENT)]);
+    let ambient = lamps.iter().fold(DVec3::ZERO, |a, l| a + l.ambient) * DVec3::from_array(k);
+    let (mut shadowed, mut judged) = (0, 0);
+    let worst = check(&img, &GROUND_CAM, F32_TOL, |x, y| {
+        let (o, d) = GROUND_CAM.ray(x, y);
+        let (on_sphere, near_silhouette) = blocked(o, o + 100.0 * d, center, radius);
+        if on_sphere || near_silhouette {
+            return None;
+        }
+        let p = GROUND_CAM.on_ground(x, y);
+        let mut c = ambient;
+        for l in &lamps {
+            let to_light = l.q - p;
+            if to_light.y <= 0.0 {
+                continue;
+            }
+            let (hit, close) = blocked(p, l.q, center, radius);
+            if close {
+                return None;
+            }
+            if hit {
+                shadowed += 1;
+                continue;
+            }
+            let cos = to_light.normalize().y;
+            c += DVec3::from_array(base)
+                * l.diffuse
+                * (l.intensity / to_light.length_squared() * cos);
+        }
+        judged += 1;
+        Some(c)
+    });
+    eprintln!(
+        "150 point lights: largest error {worst:e}, {judged} pixels, {shadowed} shadowed samples"
+    );
+    assert!(shadowed > 1000, "{shadowed} shadowed light samples");
+}
