@@ -819,3 +819,97 @@ fn an_edited_shader_file_renders_its_new_code() {
     render_with(1.0);
     render_with(2.0);
 }
+
+/// The light's diffuse colour, once per light sample that the engine lets
+/// through.
+const SAMPLE_COLOUR: &str = "\
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return l.diffuse;
+}
+";
+
+#[test]
+fn shade_runs_only_for_samples_above_the_surface_and_the_shading_normal() {
+    // A quad facing the camera (+Z) whose vertex normals lean left and
+    // right: light A, from the right and in front, is above the geometric
+    // surface everywhere but below the interpolated normal on the left;
+    // light B, from the right and behind, is below the geometric surface
+    // everywhere although above the normal on the right.
+    let cam = Cam {
+        eye: DVec3::ZERO,
+        look_at: DVec3::new(0.0, 0.0, -1.0),
+        fov: 50.0,
+        w: 64,
+        h: 48,
+    };
+    let to_a = DVec3::new(1.0, 0.0, 0.3).normalize();
+    let to_b = DVec3::new(1.0, 0.0, -0.3).normalize();
+    let lights = json!([
+        {"type": "directional", "direction": (-to_a).to_array(), "diffuse": [1, 0, 0], "ambient": [0, 0, 0]},
+        {"type": "directional", "direction": (-to_b).to_array(), "diffuse": [0, 1, 0], "ambient": [0, 0, 0]}
+    ]);
+    let z = -4.0;
+    let scene = json!({
+        "camera": cam.json(),
+        "background": BACKGROUND,
+        "shaders": {"count": {"type": "wgsl", "file": "count.wgsl"}},
+        "objects": [{"type": "triangle", "vertices": [[-1, -1, z], [1, -1, z], [0, 1, z]], "shader": "count"}],
+        "lights": lights
+    });
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("count.wgsl"), SAMPLE_COLOUR).unwrap();
+    let path = dir.path().join("scene.json");
+    std::fs::write(&path, scene.to_string()).unwrap();
+    let mut scene = load_scene(&path, &LoadOptions::default()).unwrap().scene;
+    // The triangle becomes a quad with vertex normals (the JSON format has
+    // no such meshes inline).
+    let corners = [
+        DVec3::new(-3.0, -2.5, z),
+        DVec3::new(3.0, -2.5, z),
+        DVec3::new(3.0, 2.5, z),
+        DVec3::new(-3.0, 2.5, z),
+    ];
+    let normals = [
+        DVec3::new(-0.8, 0.0, 0.6),
+        DVec3::new(0.8, 0.0, 0.6),
+        DVec3::new(0.8, 0.0, 0.6),
+        DVec3::new(-0.8, 0.0, 0.6),
+    ];
+    let tris = [[0usize, 1, 2], [0, 2, 3]];
+    scene.objects[0].shape = penumbra::scene::Shape::Mesh(penumbra::scene::Mesh {
+        positions: corners.to_vec(),
+        normals: Some(normals.to_vec()),
+        indices: tris.iter().map(|t| t.map(|i| i as u32)).collect(),
+    });
+    let img = support::render(&scene).image;
+    let (mut lit, mut unlit) = (0, 0);
+    check(&img, &cam, EXACT, |x, y| {
+        let (o, d) = cam.ray(x, y);
+        let p = o + (z - o.z) / d.z * d;
+        let t = tris
+            .iter()
+            .find_map(|t| {
+                let (a, b, c) = (corners[t[0]], corners[t[1]], corners[t[2]]);
+                let (e1, e2, q) = (b - a, c - a, p - a);
+                let det = e1.x * e2.y - e1.y * e2.x;
+                let u = (q.x * e2.y - q.y * e2.x) / det;
+                let v = (e1.x * q.y - e1.y * q.x) / det;
+                (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then_some((t, u, v))
+            })
+            .expect("the quad fills the view");
+        let (t, u, v) = t;
+        let n = ((1.0 - u - v) * normals[t[0]] + u * normals[t[1]] + v * normals[t[2]]).normalize();
+        let ln = to_a.dot(n);
+        if ln.abs() < 1e-3 {
+            return None;
+        }
+        if ln > 0.0 {
+            lit += 1;
+            Some(DVec3::X)
+        } else {
+            unlit += 1;
+            Some(DVec3::ZERO)
+        }
+    });
+    assert!(lit > 200 && unlit > 200, "{lit} lit, {unlit} unlit");
+}
