@@ -545,7 +545,6 @@ fn the_example_scene_loads_and_renders() {
 /// after loading renders other code (or fails), and a `Scene` built in
 /// memory cannot be rendered without a file.
 #[test]
-#[ignore = "renderer bug: upload re-reads the shader file instead of WgslShader::source"]
 fn a_loaded_scene_renders_the_source_it_loaded() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("flat.wgsl"), FLAT).unwrap();
@@ -792,7 +791,6 @@ fn many_point_lights_in_three_sample_chunks_match_the_formula() {
 /// shows it: an edit of a user shader reloads the scene ("kernel kept") and
 /// the image does not change.
 #[test]
-#[ignore = "renderer bug: an edited user shader file keeps its first pipeline"]
 fn an_edited_shader_file_renders_its_new_code() {
     let dir = tempfile::tempdir().unwrap();
     let base = [0.25, 0.5, 0.75];

@@ -344,10 +344,12 @@ impl UploadedScene {
     }
 }
 
-/// A compiled pipeline and the hash of the source it was compiled from.
+/// A compiled pipeline and the hash of the source it was compiled from
+/// (for a shade pipeline also of the shader file's own text).
 struct Cached {
     pipeline: ComputePipeline,
     hash: u64,
+    file_hash: u64,
 }
 
 /// Which hit records (and light-sample visibility) the stage buffers hold:
@@ -569,7 +571,14 @@ impl Renderer {
         if stage != Stage::Gather && stage != Stage::Trace {
             self.traversal_generation += 1;
         }
-        self.stage_pipelines.insert(key, Cached { pipeline, hash });
+        self.stage_pipelines.insert(
+            key,
+            Cached {
+                pipeline,
+                hash,
+                file_hash: 0,
+            },
+        );
         Ok(Compiled {
             naga,
             pipeline: creation,
@@ -604,8 +613,14 @@ impl Renderer {
         )?;
         let naga = t0.elapsed();
         let (pipeline, creation, driver) = self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT)?;
-        self.shade_pipelines
-            .insert(program.file.clone(), Cached { pipeline, hash });
+        self.shade_pipelines.insert(
+            program.file.clone(),
+            Cached {
+                pipeline,
+                hash,
+                file_hash: text_hash(&[&program.text]),
+            },
+        );
         Ok(Compiled {
             naga,
             pipeline: creation,
@@ -628,7 +643,14 @@ impl Renderer {
             done.add(self.stage_pipeline(stage, features, kernel, reload)?);
         }
         for program in &scene.materials.programs {
-            if reload || !self.shade_pipelines.contains_key(&program.file) {
+            // A user file is compiled from the text the scene loaded (two
+            // uploads of one path may differ); built-ins are re-read on a
+            // reload only.
+            let current = self
+                .shade_pipelines
+                .get(&program.file)
+                .is_some_and(|c| c.file_hash == text_hash(&[&program.text]));
+            if reload || !current {
                 done.add(self.shade_pipeline(program)?);
             }
         }
@@ -725,10 +747,7 @@ impl Renderer {
         self.check_size(1, height)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
-        let shaders = self.shaders.clone();
-        let materials = Materials::new(&scene.shaders, &shaders, &mut |f| {
-            shade::read_program(&shaders, f)
-        })?;
+        let materials = Materials::new(&scene.shaders, &self.shaders, false)?;
         set_leaves(&mut gpu.shaders, &materials);
         let layout = t0.elapsed();
         let t_bvh = Instant::now();

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use super::shade::{read_program, Materials};
+use super::shade::Materials;
 use super::{CompileError, KernelOptions, RenderError, Renderer, UploadedScene};
 
 /// What a reload recompiled and what it cost.
@@ -38,8 +38,7 @@ impl Renderer {
             ..self.kernel
         };
         // The shader files' texts (and Params) as they are now.
-        let source = self.shaders.clone();
-        let materials = Materials::new(&scene.shaders, &source, &mut |f| read_program(&source, f))?;
+        let materials = Materials::new(&scene.shaders, &self.shaders, true)?;
         // The parameter words were uploaded for the Params the files had.
         for (new, old) in materials.programs.iter().zip(&scene.materials.programs) {
             if new.fields != old.fields {

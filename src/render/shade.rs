@@ -218,12 +218,13 @@ pub struct Materials {
 
 impl Materials {
     /// The programs and parameters of `shaders`, reading the built-in files
-    /// through `source`. `text_of` gives a program's text (from disk on a
-    /// reload; else as first read).
+    /// through `source`. User files are taken as the scene loaded them
+    /// (validated against their parameters), or with `reread` from disk (a
+    /// reload after an edit).
     pub fn new(
         shaders: &[crate::scene::Shader],
         source: &ShaderSource,
-        text_of: &mut dyn FnMut(&ProgramFile) -> Result<String, CompileError>,
+        reread: bool,
     ) -> Result<Materials, CompileError> {
         use crate::scene::Shader;
         let mut m = Materials::default();
@@ -240,7 +241,10 @@ impl Materials {
             let program = match m.programs.iter().position(|p| p.file == file) {
                 Some(i) => i,
                 None => {
-                    let text = text_of(&file)?;
+                    let text = match sh {
+                        Shader::Wgsl(w) if !reread => w.source.clone(),
+                        _ => read_program(source, &file)?,
+                    };
                     let fields = assemble(source, &file, &text)?.fields;
                     m.programs.push(Program {
                         file: file.clone(),
