@@ -243,8 +243,13 @@ impl Assembled {
         kernel: &KernelOptions,
     ) -> Result<Vec<u32>, CompileError> {
         let mut words = Vec::new();
+        let key = StageKernel {
+            features: *features,
+            settings: Settings::default(),
+            options: *kernel,
+        };
         for stage in super::stages::Stage::FRAME {
-            words.extend(self.compile_entry(features, kernel, stage.entry_point())?);
+            words.extend(self.compile_entry(&key, stage.entry_point())?);
         }
         Ok(words)
     }
@@ -253,43 +258,31 @@ impl Assembled {
     /// naga reports bad WGSL as errors, but can panic on some inputs; such a
     /// panic becomes a [`CompileError`] too, so no shader file crashes the
     /// renderer or a `watch` loop.
-    pub fn compile_entry(
-        &self,
-        features: &Features,
-        kernel: &KernelOptions,
-        entry: &str,
-    ) -> Result<Vec<u32>, CompileError> {
-        crate::panics::catch(|| self.compile_unguarded(features, kernel, entry)).unwrap_or_else(
-            |panic| {
-                Err(CompileError {
-                    location: "shaders".into(),
-                    message: format!("internal error in naga ({panic}); please report this shader"),
-                })
-            },
-        )
+    pub fn compile_entry(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
+        crate::panics::catch(|| self.compile_unguarded(key, entry)).unwrap_or_else(|panic| {
+            Err(CompileError {
+                location: "shaders".into(),
+                message: format!("internal error in naga ({panic}); please report this shader"),
+            })
+        })
     }
 
     /// [`Assembled::compile_entry`] without the panic guard.
-    fn compile_unguarded(
-        &self,
-        features: &Features,
-        kernel: &KernelOptions,
-        entry: &str,
-    ) -> Result<Vec<u32>, CompileError> {
+    fn compile_unguarded(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
+        let kernel = &key.options;
         use naga::valid::{Capabilities, ValidationFlags, Validator};
         // The feature values, for overrides or (text specialisation) consts.
-        let values: Vec<(&str, bool)> = override_values(features)
+        // The general kernel compiles in every scene feature, but not the
+        // render settings (pixel jitter changes the image; AOVs need their
+        // buffer).
+        let values: Vec<(&str, bool)> = override_values(&key.features)
             .into_iter()
             .map(|(name, on)| {
-                // The general kernel compiles in every scene feature; pixel
-                // jitter is a render setting (it changes the image), not one.
-                // AOVs are an output setting too (and need their buffer).
-                let setting = name == "PIXEL_JITTER" || name == "HAS_AOV";
-                let on = on
-                    || (!kernel.specialise && !setting)
-                    || (kernel.with_sampling && name == "HAS_AREA_LIGHTS");
+                let on =
+                    on || !kernel.specialise || (kernel.with_sampling && name == "HAS_AREA_LIGHTS");
                 (name, on)
             })
+            .chain(setting_values(&key.settings))
             .collect();
         let module = if kernel.text_specialise {
             // The alternative to overrides: write the values into the WGSL
@@ -504,8 +497,39 @@ impl std::str::FromStr for TriangleTest {
     }
 }
 
+/// Render settings that change the kernel (unlike features, not properties
+/// of the scene): part of the stage kernel key.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Settings {
+    /// Several samples per pixel: pixel jitter is compiled in.
+    pub pixel_jitter: bool,
+    /// Arbitrary output variables are written.
+    pub aov: bool,
+}
+
+/// What a stage is specialised to, and cached by (with its files' text):
+/// the scene's features, the render settings and the user's kernel options.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct StageKernel {
+    /// The kinds of primitive, light and shader the scene uses.
+    pub features: Features,
+    /// Sample count and outputs.
+    pub settings: Settings,
+    /// BVH or brute force, triangle test, shadow start, sampler...
+    pub options: KernelOptions,
+}
+
+/// The WGSL `override` for each render setting, as in `shaders/render.wgsl`.
+pub fn setting_values(s: &Settings) -> [(&'static str, bool); 2] {
+    [("PIXEL_JITTER", s.pixel_jitter), ("HAS_AOV", s.aov)]
+}
+
+/// The WGSL `override`s of the kernel options (besides the features' and
+/// settings'), as in `shaders/render.wgsl`.
+pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPSILON", "SAMPLER"];
+
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 11] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 9] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -516,8 +540,6 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 11] {
         ("HAS_SPOT", f.spot_lights),
         ("HAS_CHECKER", f.checker),
         ("HAS_AREA_LIGHTS", f.area_lights),
-        ("PIXEL_JITTER", f.pixel_jitter),
-        ("HAS_AOV", f.aov),
     ]
 }
 
@@ -570,6 +592,28 @@ mod tests {
         src.compile_frame(f, k)
     }
 
+    /// The override tables (features, settings, kernel options) name
+    /// exactly the `override`s the engine's WGSL declares.
+    #[test]
+    fn override_tables_match_the_wgsl() {
+        let module = ShaderSource::Embedded.assemble().unwrap().parse().unwrap();
+        let mut wgsl: Vec<String> = module
+            .overrides
+            .iter()
+            .filter_map(|(_, o)| o.name.clone())
+            .collect();
+        wgsl.sort();
+        let mut table: Vec<String> = override_values(&Features::default())
+            .iter()
+            .map(|(n, _)| *n)
+            .chain(setting_values(&Settings::default()).iter().map(|(n, _)| *n))
+            .chain(OPTION_OVERRIDES)
+            .map(String::from)
+            .collect();
+        table.sort();
+        assert_eq!(wgsl, table);
+    }
+
     #[test]
     fn every_feature_set_compiles() {
         let src = ShaderSource::Embedded.assemble().unwrap();
@@ -585,8 +629,6 @@ mod tests {
             blinn_phong: true,
             checker: true,
             area_lights: true,
-            pixel_jitter: true,
-            aov: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [

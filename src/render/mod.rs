@@ -22,7 +22,8 @@ use crate::vulkan::{
     DeviceSelector, Dispatch, Resource, TexelImage, VulkanError,
 };
 pub use compile::{
-    Accel, CompileError, KernelOptions, Sampler, ShaderSource, ShadowOffset, TriangleTest,
+    Accel, CompileError, KernelOptions, Sampler, Settings, ShaderSource, ShadowOffset, StageKernel,
+    TriangleTest,
 };
 use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_WARM_UP};
 pub use reload::ReloadReport;
@@ -363,8 +364,7 @@ struct HitKey {
     rows: std::ops::Range<u32>,
     pass_index: u32,
     seed: u32,
-    features: Features,
-    kernel: KernelOptions,
+    kernel: StageKernel,
 }
 
 /// The stage buffers of one tile plan, and whose hits they hold.
@@ -385,7 +385,7 @@ const KEPT_STAGE_BUFFERS: usize = 2;
 /// the text of their shader files.
 pub struct Renderer {
     // Field order matters: pipelines and buffers must drop before the context.
-    stage_pipelines: HashMap<(Stage, Features, KernelOptions), Cached>,
+    stage_pipelines: HashMap<(Stage, StageKernel), Cached>,
     shade_pipelines: HashMap<ProgramFile, Cached>,
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
@@ -547,11 +547,10 @@ impl Renderer {
     fn stage_pipeline(
         &mut self,
         stage: Stage,
-        features: Features,
-        kernel: KernelOptions,
+        kernel: StageKernel,
         reload: bool,
     ) -> Result<Compiled, RenderError> {
-        let key = (stage, features, kernel);
+        let key = (stage, kernel);
         if !reload && self.stage_pipelines.contains_key(&key) {
             return Ok(Compiled::default());
         }
@@ -565,7 +564,7 @@ impl Renderer {
         {
             return Ok(Compiled::default());
         }
-        let spirv = assembled.compile_entry(&features, &kernel, stage.entry_point())?;
+        let spirv = assembled.compile_entry(&kernel, stage.entry_point())?;
         let naga = t0.elapsed();
         let (pipeline, creation, driver) = self.build_pipeline(&spirv, stage.entry_point())?;
         if stage != Stage::Gather && stage != Stage::Trace {
@@ -606,11 +605,9 @@ impl Renderer {
         {
             return Ok(Compiled::default());
         }
-        let spirv = source.assembled.compile_entry(
-            &Features::default(),
-            &KernelOptions::default(),
-            shade::SHADE_ENTRY_POINT,
-        )?;
+        let spirv = source
+            .assembled
+            .compile_entry(&StageKernel::default(), shade::SHADE_ENTRY_POINT)?;
         let naga = t0.elapsed();
         let (pipeline, creation, driver) = self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT)?;
         self.shade_pipelines.insert(
@@ -634,13 +631,12 @@ impl Renderer {
     fn frame_pipelines(
         &mut self,
         scene: &UploadedScene,
-        features: Features,
-        kernel: KernelOptions,
+        kernel: StageKernel,
         reload: bool,
     ) -> Result<Compiled, RenderError> {
         let mut done = Compiled::default();
         for stage in Stage::FRAME {
-            done.add(self.stage_pipeline(stage, features, kernel, reload)?);
+            done.add(self.stage_pipeline(stage, kernel, reload)?);
         }
         for program in &scene.materials.programs {
             // A user file is compiled from the text the scene loaded (two
@@ -968,17 +964,21 @@ impl Renderer {
             });
         }
         // Pixel jitter is compiled in only when there is more than one sample.
-        let features = Features {
+        let settings = Settings {
             pixel_jitter: sampling.spp > 1,
             aov: with_aovs,
-            ..scene.features
         };
         // The BVH buffers are empty for a scene uploaded for brute force.
         let key_kernel = KernelOptions {
             accel: scene.kernel.accel,
             ..self.kernel
         };
-        let compiled = self.frame_pipelines(scene, features, key_kernel, false)?;
+        let stage_kernel = StageKernel {
+            features: scene.features,
+            settings,
+            options: key_kernel,
+        };
+        let compiled = self.frame_pipelines(scene, stage_kernel, false)?;
         let ctx = &self.context;
         let aov_buffer = if with_aovs {
             let bytes = width as u64 * height as u64 * std::mem::size_of::<layout::Aov>() as u64;
@@ -1037,8 +1037,7 @@ impl Renderer {
             rows: rows.clone(),
             pass_index,
             seed: sampling.seed,
-            features,
-            kernel: key_kernel,
+            kernel: stage_kernel,
         };
         let reuse = self.reuse_hits
             && reusable
@@ -1059,7 +1058,7 @@ impl Renderer {
         refs[Binding::QueueRays as usize] = (&buffers.queue_rays).into();
         refs[Binding::QueueFalloff as usize] = (&buffers.queue_falloff).into();
         refs[Binding::Radiance as usize] = (&buffers.radiance).into();
-        let stage = |s: Stage| &self.stage_pipelines[&(s, features, key_kernel)].pipeline;
+        let stage = |s: Stage| &self.stage_pipelines[&(s, stage_kernel)].pipeline;
         let programs: Vec<&ComputePipeline> = scene
             .materials
             .programs

@@ -50,7 +50,13 @@ impl Renderer {
         }
         self.reuse_hits = false;
         let old = std::mem::replace(&mut scene.materials, materials);
-        let compiled = self.frame_pipelines(scene, scene.features, kernel, true);
+        // Watch renders one sample per pixel without AOVs.
+        let key = super::StageKernel {
+            features: scene.features,
+            settings: super::Settings::default(),
+            options: kernel,
+        };
+        let compiled = self.frame_pipelines(scene, key, true);
         match compiled {
             Ok(c) => {
                 // The next renders of this upload may reuse their hits (the

@@ -302,7 +302,7 @@ mod tests {
             assert!(s.has_ambient);
             let words = s
                 .assembled
-                .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
+                .compile_entry(&Default::default(), SHADE_ENTRY_POINT)
                 .unwrap();
             assert_eq!(words[0], 0x0723_0203);
         }
@@ -315,7 +315,7 @@ mod tests {
         let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
         assert!(s.fields.is_empty() && !s.has_ambient);
         s.assembled
-            .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
+            .compile_entry(&Default::default(), SHADE_ENTRY_POINT)
             .unwrap();
     }
 
@@ -346,7 +346,7 @@ mod tests {
             "{loader}"
         );
         s.assembled
-            .compile_entry(&Default::default(), &Default::default(), SHADE_ENTRY_POINT)
+            .compile_entry(&Default::default(), SHADE_ENTRY_POINT)
             .unwrap();
     }
 }

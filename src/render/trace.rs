@@ -60,13 +60,16 @@ impl Renderer {
         scene: &UploadedScene,
         rays: &[TraceRay],
     ) -> Result<Vec<Option<TraceHit>>, RenderError> {
-        let features = scene.features;
-        let kernel = super::KernelOptions {
-            accel: scene.kernel.accel,
-            ..self.kernel
+        let kernel = super::StageKernel {
+            features: scene.features,
+            settings: super::Settings::default(),
+            options: super::KernelOptions {
+                accel: scene.kernel.accel,
+                ..self.kernel
+            },
         };
-        self.stage_pipeline(Stage::Trace, features, kernel, false)?;
-        let pipeline = &self.stage_pipelines[&(Stage::Trace, features, kernel)].pipeline;
+        self.stage_pipeline(Stage::Trace, kernel, false)?;
+        let pipeline = &self.stage_pipelines[&(Stage::Trace, kernel)].pipeline;
         let ctx = &self.context;
         let mut out = Vec::with_capacity(rays.len());
         for chunk in rays.chunks(RAYS_PER_DISPATCH) {

@@ -79,11 +79,6 @@ pub struct Features {
     pub spot_lights: bool,
     /// An area light (rectangle or sphere): light sampling is compiled in.
     pub area_lights: bool,
-    /// Several samples per pixel: pixel jitter is compiled in. Not a property
-    /// of the scene: the renderer sets it from the sample count.
-    pub pixel_jitter: bool,
-    /// Arbitrary output variables are written. Set by the renderer.
-    pub aov: bool,
     /// A Phong shader is reachable.
     pub phong: bool,
     /// A Blinn-Phong shader is reachable.
