@@ -713,8 +713,7 @@ mod tests {
         let broken = ShaderSource::Directory(dir.path().to_path_buf())
             .assemble()
             .unwrap();
-        let err = compile(&broken, &Features::default(), &KernelOptions::default())
-            .unwrap_err();
+        let err = compile(&broken, &Features::default(), &KernelOptions::default()).unwrap_err();
         let want_line = include_str!("../../shaders/lights.wgsl")
             .lines()
             .position(|l| l.contains("let dist = sqrt(dist2);"))

@@ -551,7 +551,11 @@ impl Renderer {
         let t0 = Instant::now();
         let assembled = self.shaders.assemble_stage(stage)?;
         let hash = text_hash(&[&assembled.text]);
-        if self.stage_pipelines.get(&key).is_some_and(|c| c.hash == hash) {
+        if self
+            .stage_pipelines
+            .get(&key)
+            .is_some_and(|c| c.hash == hash)
+        {
             return Ok(Compiled::default());
         }
         let spirv = assembled.compile_entry(&features, &kernel, stage.entry_point())?;
@@ -577,7 +581,7 @@ impl Renderer {
         if source.fields != program.fields {
             return Err(RenderError::Compile(CompileError {
                 location: program.file.label(),
-                message: "its Params changed since the scene was loaded".into(),
+                message: shade::PARAMS_CHANGED.into(),
             }));
         }
         let hash = text_hash(&[&source.assembled.text]);
@@ -601,7 +605,7 @@ impl Renderer {
             naga,
             pipeline: creation,
             driver,
-            names: vec![format!("shade {}", program.file.label())],
+            names: vec![format!("shade {}", program.file.label_in(&self.shaders))],
         })
     }
 
@@ -641,9 +645,8 @@ impl Renderer {
         let ctx = &self.context;
         let px = plan.pixels();
         let entries = px * plan.chunk as u64;
-        let storage = |label: &str, bytes: u64| {
-            ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16))
-        };
+        let storage =
+            |label: &str, bytes: u64| ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16));
         self.stage_buffers.push(StageBuffers {
             plan,
             hits: storage("hit records", px * tiles::HIT_RECORD_BYTES)?,

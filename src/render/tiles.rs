@@ -61,8 +61,7 @@ impl TilePlan {
 
     /// Bytes of stage memory the plan's buffers take.
     pub fn bytes(&self) -> u64 {
-        self.pixels()
-            * (HIT_RECORD_BYTES + RADIANCE_BYTES + self.chunk as u64 * QUEUE_ENTRY_BYTES)
+        self.pixels() * (HIT_RECORD_BYTES + RADIANCE_BYTES + self.chunk as u64 * QUEUE_ENTRY_BYTES)
     }
 
     /// The sample chunks: (first sample, samples in the chunk); one empty
@@ -104,7 +103,11 @@ mod tests {
         for (size, samples) in [([16384, 16384], 1), ([4096, 4096], 256), ([1, 9000], 1000)] {
             for bound in [MIN_STAGE_MEMORY, 1 << 20, DEFAULT_STAGE_MEMORY] {
                 let p = TilePlan::new(size, samples, bound, 128 << 20);
-                assert!(p.bytes() <= bound, "{size:?} {samples} {bound}: {}", p.bytes());
+                assert!(
+                    p.bytes() <= bound,
+                    "{size:?} {samples} {bound}: {}",
+                    p.bytes()
+                );
                 assert!(p.tile[0] % 8 == 0 && p.tile[1] % 8 == 0);
                 let tiles = p.tiles(size[0], 0..size[1]);
                 let covered: u64 = tiles.iter().map(|(_, s)| s[0] as u64 * s[1] as u64).sum();

@@ -136,7 +136,8 @@ impl Context {
         }
         let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = Vec::new();
         let mut image_infos: Vec<[vk::DescriptorImageInfo; 1]> = Vec::new();
-        let mut updates: Vec<(vk::DescriptorSet, u32, vk::DescriptorType, bool, usize)> = Vec::new();
+        let mut updates: Vec<(vk::DescriptorSet, u32, vk::DescriptorType, bool, usize)> =
+            Vec::new();
         let mut seen: Vec<vk::DescriptorSet> = Vec::new();
         for d in chain {
             if seen.contains(&d.pipeline.set) {
