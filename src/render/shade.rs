@@ -304,7 +304,7 @@ mod tests {
             let file = ProgramFile::Builtin(name);
             let text = read_program(&ShaderSource::Embedded, &file).unwrap();
             let s = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
-            let names: Vec<_> = s.fields.iter().map(|(n, k)| (n.as_str(), *k)).collect();
+            let names: Vec<_> = s.fields.iter().map(|f| (f.name.as_str(), f.ty)).collect();
             assert_eq!(
                 names,
                 [

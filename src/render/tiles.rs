@@ -108,7 +108,7 @@ mod tests {
                     "{size:?} {samples} {bound}: {}",
                     p.bytes()
                 );
-                assert!(p.tile[0] % 8 == 0 && p.tile[1] % 8 == 0);
+                assert!(p.tile[0].is_multiple_of(8) && p.tile[1].is_multiple_of(8));
                 let tiles = p.tiles(size[0], 0..size[1]);
                 let covered: u64 = tiles.iter().map(|(_, s)| s[0] as u64 * s[1] as u64).sum();
                 assert_eq!(covered, size[0] as u64 * size[1] as u64);

@@ -162,7 +162,7 @@ impl Session {
             let reloaded = scene && self.reload_scene(&mut out);
             // After a Params change, a scene that does not load (its JSON
             // no longer fits the file) is the error to show.
-            if !(changes.shaders || reloaded) || (retried && !reloaded) {
+            if !reloaded && (retried || !changes.shaders) {
                 break;
             }
             let Some(up) = &mut self.uploaded else {
