@@ -248,7 +248,7 @@ fn the_live_page_follows_edits_and_shows_errors() {
         px(v).is_some_and(|c| c[0] == 0)
             && v["line"]
                 .as_str()
-                .is_some_and(|l| l.contains("shaders (shading/shader.wgsl)"))
+                .is_some_and(|l| l.contains("shaders (shading/phong.wgsl)"))
             && v["version"] == v["announced"]
     });
     assert_ne!(edited["version"].as_str().unwrap(), v0);
@@ -257,7 +257,7 @@ fn the_live_page_follows_edits_and_shows_errors() {
         edited["line"]
             .as_str()
             .unwrap()
-            .contains("shaders (shading/shader.wgsl)"),
+            .contains("shaders (shading/phong.wgsl)"),
         "{edited}"
     );
     let good = px(&edited).unwrap();
@@ -266,7 +266,7 @@ fn the_live_page_follows_edits_and_shows_errors() {
     let broken = fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0) +");
     let n = broken.lines().position(|l| l.contains("1.0) +;")).unwrap() + 1;
     std::fs::write(fx.shader_path(), &broken).unwrap();
-    let at = format!("shading/shader.wgsl:{n}:");
+    let at = format!("shading/phong.wgsl:{n}:");
     let shown = b.wait("the error", |v| {
         v["error"].as_str().is_some_and(|e| e.contains(&at))
     });

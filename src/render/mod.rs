@@ -594,7 +594,7 @@ impl Renderer {
         if source.fields != program.fields {
             return Err(RenderError::Compile(CompileError {
                 location: program.file.label(),
-                message: "its Params changed since the scene was loaded".into(),
+                message: shade::PARAMS_CHANGED.into(),
             }));
         }
         let hash = text_hash(&[&source.assembled.text]);
@@ -622,7 +622,7 @@ impl Renderer {
             naga,
             pipeline: creation,
             driver,
-            names: vec![format!("shade {}", program.file.label())],
+            names: vec![format!("shade {}", program.file.label_in(&self.shaders))],
         })
     }
 

@@ -44,7 +44,10 @@ impl Renderer {
             if new.fields != old.fields {
                 return Err(RenderError::Compile(CompileError {
                     location: new.file.label(),
-                    message: "its Params changed since the scene was loaded: save the scene file to reload it".into(),
+                    message: format!(
+                        "{}: save the scene file to reload it",
+                        super::shade::PARAMS_CHANGED
+                    ),
                 }));
             }
         }

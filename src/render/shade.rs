@@ -16,6 +16,11 @@ use super::compile::{Assembled, CompileError, ShaderSource};
 use super::stages::SHADE_PRELUDE;
 use crate::scene::shading::wgsl::{reflect, ParamField, ParamType, ShaderFileError};
 
+/// How a reload's error starts when a user shader file's `struct Params`
+/// no longer matches the parameters uploaded with the scene (`penumbra
+/// watch` then reloads the scene).
+pub const PARAMS_CHANGED: &str = "its Params changed since the scene was loaded";
+
 /// The shade stage's entry point (`shaders/stages/shade.wgsl`).
 pub const SHADE_ENTRY_POINT: &str = "penumbra_shade_stage";
 
@@ -35,6 +40,19 @@ impl ProgramFile {
         match self {
             ProgramFile::Builtin(name) => format!("shaders/{name}"),
             ProgramFile::User(path) => path.display().to_string(),
+        }
+    }
+
+    /// The name compile errors and reload reports use when the built-in
+    /// files come from `source`: a built-in read from a
+    /// [`ShaderSource::Directory`] is named by its path there (the file the
+    /// developer edits); otherwise as [`ProgramFile::label`].
+    pub fn label_in(&self, source: &ShaderSource) -> String {
+        match (self, source) {
+            (ProgramFile::Builtin(name), ShaderSource::Directory(dir)) => {
+                dir.join(name).display().to_string()
+            }
+            _ => self.label(),
         }
     }
 }
@@ -68,11 +86,12 @@ pub fn assemble(
     text: &str,
 ) -> Result<ShadeSource, CompileError> {
     let mut assembled = source.assemble_files(SHADE_PRELUDE)?;
-    assembled.push_file(file.label(), text);
+    let label = file.label_in(source);
+    assembled.push_file(label.clone(), text);
     // What the file declares (crate::scene::shading::wgsl, which also
     // checks `shade` and `ambient`); a file without Params gets the
     // placeholder that `shade` still takes.
-    let declared = reflect(std::path::Path::new(&file.label()), text).map_err(file_error)?;
+    let declared = reflect(std::path::Path::new(&label), text).map_err(file_error)?;
     let placeholder = declared.fields.is_empty() && !declares_params(text);
     if placeholder {
         assembled.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
@@ -80,7 +99,7 @@ pub fn assemble(
     let fields = declared.fields;
     let has_ambient = declared.has_ambient;
     assembled.push_file(
-        format!("(penumbra's parameter loader for {})", file.label()),
+        format!("(penumbra's parameter loader for {label})"),
         &generated(&fields, has_ambient, placeholder),
     );
     Ok(ShadeSource {
@@ -265,7 +284,7 @@ impl Materials {
                     if w.fields != m.programs[program].fields {
                         return Err(CompileError {
                             location: label,
-                            message: "its Params changed since the scene was loaded: save the scene file to reload it".into(),
+                            message: format!("{PARAMS_CHANGED}: save the scene file to reload it"),
                         });
                     }
                     w.words()

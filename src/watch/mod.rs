@@ -1,10 +1,12 @@
 //! `penumbra watch`: shader and scene hot reload.
 //!
 //! The loop ([`run`]) watches the scene file, every file it read, and the
-//! shader sources ([`files`]); waits for a debounced batch of changes;
-//! rebuilds only what changed ([`stage::Session::apply`]: a shader edit
-//! recompiles the kernel and keeps the scene upload, a scene edit re-uploads
-//! and keeps the kernel unless the scene's features change); renders a
+//! shader sources ([`files`]): the engine's (with `--shaders`) and the
+//! user WGSL files the scene refers to; waits for a debounced batch of
+//! changes; rebuilds only what changed ([`stage::Session::apply`]: a shader
+//! edit recompiles only the pipelines whose files changed and keeps the
+//! scene upload, and after a shading edit the hit records too; a scene edit
+//! re-uploads and keeps the pipelines unless the scene's features change); renders a
 //! quarter-resolution preview and then the full image, writing the output
 //! atomically after each ([`stage::Session::render_stages`]); and reports
 //! each reload as an [`Event`]. Errors (a broken shader or scene, a failed
@@ -84,6 +86,9 @@ pub struct StageReport {
     pub compile: CompileTimes,
     /// The render dispatch and readback.
     pub render: Duration,
+    /// The render reused the last render's hit records: a shading edit ran
+    /// only the shade and gather stages.
+    pub hits_reused: bool,
     /// Encoding the image (PNG or EXR).
     pub encode: Duration,
     /// Writing and renaming the file.
@@ -193,11 +198,25 @@ pub fn run(
             .collect(),
         None => Vec::new(),
     };
-    let watch_set = |scene_files: &[PathBuf]| WatchSet {
-        scene: scene_files.iter().map(|p| normalise(p)).collect(),
-        shaders: shader_files.iter().cloned().collect(),
+    // The scene's user shader files are shaders: an edit recompiles only
+    // their shade pipelines and keeps the upload and the hit records.
+    let watch_set = |session: &Session| {
+        let user: Vec<PathBuf> = session
+            .user_shader_files()
+            .iter()
+            .map(|p| normalise(p))
+            .collect();
+        WatchSet {
+            scene: session
+                .scene_files()
+                .iter()
+                .map(|p| normalise(p))
+                .filter(|p| !user.contains(p))
+                .collect(),
+            shaders: shader_files.iter().cloned().chain(user).collect(),
+        }
     };
-    let mut watcher = FileWatcher::new(watch_set(session.scene_files()), opts.debounce)?;
+    let mut watcher = FileWatcher::new(watch_set(&session), opts.debounce)?;
 
     let live = Arc::new(server::Live::default());
     let _server = match opts.serve {
@@ -253,7 +272,7 @@ pub fn run(
         };
         let applied = session.apply(changes);
         // The scene may now reference other files.
-        let new_set = watch_set(session.scene_files());
+        let new_set = watch_set(&session);
         if &new_set != watcher.set() {
             if let Err(e) = watcher.update(new_set) {
                 eprintln!("warning: cannot watch every scene file: {e}");
@@ -284,6 +303,7 @@ pub fn run(
                             height: frame.image.height,
                             compile: frame.compile,
                             render: frame.render,
+                            hits_reused: frame.hits_reused,
                             encode,
                             write,
                             latency: written_at - b.first_event,
@@ -326,8 +346,13 @@ pub fn run(
                 .find(|c| c.total() > Duration::ZERO)
         });
         if let Some(c) = &compile {
+            let what = if c.recompiled.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", c.recompiled.join(", "))
+            };
             parts.push(format!(
-                "compile {} (naga {}, pipeline {}, driver {})",
+                "compile {} (naga {}, pipeline {}, driver {}{what})",
                 ms(c.total()),
                 ms(c.naga),
                 ms(c.pipeline),
@@ -342,10 +367,11 @@ pub fn run(
         for (i, s) in stages.iter().enumerate() {
             let name = if divisors[i] > 1 { "preview" } else { "full" };
             parts.push(format!(
-                "{name} {}x{}: render {}, encode+write {}, latency {}",
+                "{name} {}x{}: render {}{}, encode+write {}, latency {}",
                 s.width,
                 s.height,
                 ms(s.render),
+                if s.hits_reused { " (hits reused)" } else { "" },
                 ms(s.encode + s.write),
                 ms(s.latency)
             ));

@@ -4,14 +4,27 @@
 //!
 //! The session keeps the last good state: a scene that fails to load or
 //! upload keeps the previous upload, a shader that fails to compile keeps the
-//! previous kernel ([`Renderer::reload_shaders`]), and a failed render writes
-//! nothing, so the output always holds the last good image.
+//! previous pipelines ([`Renderer::reload_shaders`]), and a failed render
+//! writes nothing, so the output always holds the last good image.
+//!
+//! The user WGSL files a scene refers to (`"type": "wgsl"`) are shaders, not
+//! scene files: an edit recompiles only that file's shade pipeline and the
+//! next render reuses the hit records. An edit that changes a file's
+//! `struct Params` cannot keep the uploaded parameters, so it reloads the
+//! scene as well, which checks the JSON's `params` against the new fields.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::loaders::{self, LoadOptions};
-use crate::render::{Image, RenderError, Renderer, UploadedScene};
+use crate::render::shade::PARAMS_CHANGED;
+use crate::render::{Image, ReloadReport, RenderError, Renderer, UploadedScene};
+use crate::scene::Shader;
+
+/// Whether a reload failed because a user shader's `Params` changed.
+fn params_changed(e: &RenderError) -> bool {
+    matches!(e, RenderError::Compile(c) if c.message.starts_with(PARAMS_CHANGED))
+}
 
 /// What changed since the last reload.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -35,6 +48,17 @@ pub struct CompileTimes {
     /// The pipelines recompiled ([`crate::render::ReloadReport::recompiled`]):
     /// a shading edit recompiles only its file's shade pipeline.
     pub recompiled: Vec<String>,
+}
+
+impl CompileTimes {
+    fn from_report(report: ReloadReport) -> CompileTimes {
+        CompileTimes {
+            naga: report.shader_compile,
+            pipeline: report.pipeline_creation,
+            driver: report.driver_compile,
+            recompiled: report.recompiled,
+        }
+    }
 }
 
 impl CompileTimes {
@@ -66,6 +90,9 @@ pub struct StageFrame {
     pub compile: CompileTimes,
     /// The render dispatch and the readback.
     pub render: Duration,
+    /// The render reused the previous render's hit records (only the shade
+    /// and gather stages ran: [`crate::render::RenderStats::hits_reused`]).
+    pub hits_reused: bool,
 }
 
 /// The renderer, the scene upload and the errors of the current files.
@@ -76,6 +103,8 @@ pub struct Session {
     uploaded: Option<UploadedScene>,
     /// Every file the last good scene read.
     scene_files: Vec<PathBuf>,
+    /// The user WGSL files among them (the scene's `wgsl` shaders).
+    user_shaders: Vec<PathBuf>,
     /// The shaders on disk do not compile (the last good kernel is in use).
     pub shader_error: Option<String>,
     /// The scene on disk does not load (the last good upload is in use).
@@ -91,6 +120,7 @@ impl Session {
             load,
             uploaded: None,
             scene_files: vec![scene_path.to_path_buf()],
+            user_shaders: Vec::new(),
             shader_error: None,
             scene_error: None,
         }
@@ -102,65 +132,116 @@ impl Session {
         &self.scene_files
     }
 
+    /// The user shader files (`"type": "wgsl"`) of the last good scene, as
+    /// the scene gives them (resolved against its folder); also in
+    /// [`Session::scene_files`]. The loop watches them as shaders.
+    pub fn user_shader_files(&self) -> &[PathBuf] {
+        &self.user_shaders
+    }
+
     /// The full image size of the current upload.
     pub fn size(&self) -> Option<(u32, u32)> {
         self.uploaded.as_ref().map(UploadedScene::size)
     }
 
-    /// Rebuilds what `changes` invalidates: reloads and re-uploads the scene
-    /// (the kernel cache keys on the scene's features, so a scene edit that
-    /// keeps them keeps the pipeline), and recompiles the kernel after a
-    /// shader edit (keeping the upload).
+    /// Rebuilds what `changes` invalidates.
+    ///
+    /// A scene edit reloads and re-uploads the scene (the stage pipelines
+    /// are cached by the scene's features, so an edit that keeps them keeps
+    /// them). A shader edit re-reads the shader files and recompiles only
+    /// the pipelines whose text changed, keeping the upload (and, when only
+    /// shade pipelines changed, the hit records). A shader edit also retries
+    /// a scene that failed to load (it may have failed on a shader file), and
+    /// one that changes a user shader's `Params` reloads the scene, so that
+    /// its JSON `params` are checked against the new fields.
     pub fn apply(&mut self, changes: Changes) -> Applied {
         let mut out = Applied::default();
-        if changes.scene {
-            let t0 = Instant::now();
-            match loaders::load_scene(&self.scene_path, &self.load) {
-                Err(e) => self.scene_error = Some(format!("scene error: {e}")),
-                Ok(loaded) => match self.renderer.upload(&loaded.scene) {
-                    Err(e) => {
-                        self.scene_error = Some(format!("{}: {e}", self.scene_path.display()))
-                    }
-                    Ok(up) => {
-                        self.uploaded = Some(up);
-                        self.scene_files = loaded.files;
-                        self.scene_error = None;
-                        out.upload = Some(t0.elapsed());
-                        out.render = true;
-                    }
-                },
+        let mut scene = changes.scene || (changes.shaders && self.scene_error.is_some());
+        let mut retried = false;
+        loop {
+            let reloaded = scene && self.reload_scene(&mut out);
+            // After a Params change, a scene that does not load (its JSON
+            // no longer fits the file) is the error to show.
+            if !reloaded && (retried || !changes.shaders) {
+                break;
             }
-            out.errors.extend(self.scene_error.clone());
-        }
-        if changes.shaders {
-            match &mut self.uploaded {
-                Some(up) => match self.renderer.reload_shaders(up) {
-                    Ok(report) => {
-                        self.shader_error = None;
-                        out.compile = Some(CompileTimes {
-                            naga: report.shader_compile,
-                            pipeline: report.pipeline_creation,
-                            driver: report.driver_compile,
-                            recompiled: report.recompiled,
-                        });
-                        out.render = true;
-                    }
-                    Err(e) => self.shader_error = Some(e.to_string()),
-                },
+            let Some(up) = &mut self.uploaded else {
                 // Nothing to compile for yet: the first render compiles.
-                None => {
-                    self.renderer.clear_pipeline_cache();
+                self.renderer.clear_pipeline_cache();
+                self.shader_error = None;
+                out.render = self.scene_error.is_none();
+                break;
+            };
+            match self.renderer.reload_shaders(up) {
+                Ok(report) => {
                     self.shader_error = None;
-                    out.render = self.scene_error.is_none();
+                    // After a scene edit alone, report a compile only when
+                    // one happened (new features, or a file that changed).
+                    if changes.shaders || !report.recompiled.is_empty() {
+                        out.compile = Some(CompileTimes::from_report(report));
+                    }
+                    out.render = true;
+                }
+                Err(e) if params_changed(&e) && !scene => {
+                    // The uploaded parameters no longer fit the file: reload
+                    // the scene too (once).
+                    scene = true;
+                    retried = true;
+                    continue;
+                }
+                Err(e) => {
+                    self.shader_error = Some(e.to_string());
+                    // A scene edit still renders, with the last good
+                    // pipelines; a shader edit has nothing new to show.
                 }
             }
-            out.errors.extend(self.shader_error.clone());
-        } else if changes.scene && out.render && self.shader_error.is_some() {
-            // A scene edit while the shaders on disk are broken renders with
-            // the last good kernel; say so.
-            out.errors.extend(self.shader_error.clone());
+            break;
+        }
+        if let Some(e) = &self.shader_error {
+            if changes.shaders || out.render {
+                out.errors.push(e.clone());
+            }
         }
         out
+    }
+
+    /// Loads and uploads the scene; on success replaces the upload and
+    /// returns true, else keeps the last good one and records the error.
+    fn reload_scene(&mut self, out: &mut Applied) -> bool {
+        let t0 = Instant::now();
+        let result = match loaders::load_scene(&self.scene_path, &self.load) {
+            Err(e) => Err(format!("scene error: {e}")),
+            Ok(loaded) => match self.renderer.upload(&loaded.scene) {
+                Err(e) => Err(format!("{}: {e}", self.scene_path.display())),
+                Ok(up) => Ok((loaded, up)),
+            },
+        };
+        match result {
+            Err(e) => {
+                out.errors.push(e.clone());
+                self.scene_error = Some(e);
+                false
+            }
+            Ok((loaded, up)) => {
+                self.uploaded = Some(up);
+                self.user_shaders = loaded
+                    .scene
+                    .shaders
+                    .iter()
+                    .filter_map(|s| match s {
+                        Shader::Wgsl(w) => Some(w.path.clone()),
+                        _ => None,
+                    })
+                    .collect();
+                self.user_shaders.sort();
+                self.user_shaders.dedup();
+                self.scene_files = loaded.files;
+                self.scene_error = None;
+                out.upload = Some(t0.elapsed());
+                out.render = true;
+                true
+            }
+        }
     }
 
     /// Renders the stages, largest divisor first (e.g. `[4, 1]`: a quarter
@@ -211,6 +292,7 @@ impl Session {
                         image: frame.image,
                         compile: c,
                         render: t.render + t.readback,
+                        hits_reused: frame.stats.hits_reused,
                     });
                 }
                 Err(RenderError::Compile(e)) => {

@@ -49,11 +49,13 @@ pub struct Fixture {
     pub shaders: PathBuf,
     pub scene: PathBuf,
     pub out: PathBuf,
-    /// `shading/shader.wgsl` as copied.
+    /// `shading/phong.wgsl` as copied.
     pub shader_original: String,
 }
 
-pub const SHADER: &str = "shading/shader.wgsl";
+/// The shader file the tests edit: the built-in Phong shader, which the
+/// fixture's scene uses.
+pub const SHADER: &str = "shading/phong.wgsl";
 
 impl Fixture {
     pub fn new() -> Fixture {
@@ -87,7 +89,8 @@ impl Fixture {
         self.shaders.join(SHADER)
     }
 
-    /// `shade()` with its returned colour multiplied by `factor` (WGSL).
+    /// `ambient()` and `shade()` with their colours multiplied by `factor`
+    /// (WGSL).
     pub fn shader_scaled(&self, factor: &str) -> String {
         scale_shade(&self.shader_original, factor)
     }
@@ -102,20 +105,39 @@ impl Fixture {
     }
 }
 
-/// Multiplies what `shade()` returns by `factor`.
+/// Multiplies what `ambient()` and `shade()` return by `factor` (WGSL):
+/// the colour of a Phong-type shader file, scaled.
 pub fn scale_shade(src: &str, factor: &str) -> String {
+    let src = scale_return(src, "fn ambient(", factor);
+    scale_return(&src, "fn shade(", factor)
+}
+
+/// Multiplies the value of the first `return` after `function` (e.g.
+/// `fn shade(`) by `factor`.
+pub fn scale_return(src: &str, function: &str, factor: &str) -> String {
     let start = src
-        .find("fn shade(")
-        .expect("shading/shader.wgsl has fn shade(");
-    let rel = src[start..]
-        .find("return colour;")
-        .expect("shade() ends with `return colour;`");
-    let at = start + rel;
+        .find(function)
+        .unwrap_or_else(|| panic!("the shader has {function}"));
+    let ret = start
+        + src[start..]
+            .find("return ")
+            .unwrap_or_else(|| panic!("{function} returns"));
+    let value = ret + "return ".len();
+    let end = value + src[value..].find(';').expect("return ...;");
     format!(
-        "{}return colour * {factor};{}",
-        &src[..at],
-        &src[at + "return colour;".len()..]
+        "{}({}) * {factor}{}",
+        &src[..value],
+        &src[value..end],
+        &src[end..]
     )
+}
+
+/// The name a reload report gives the shade pipeline of shader file `path`
+/// (a built-in in the watched `--shaders` copy, or a user's file): as the
+/// loop resolves the directory.
+pub fn shade_name(path: &Path) -> String {
+    let dir = path.parent().unwrap().canonicalize().unwrap();
+    format!("shade {}", dir.join(path.file_name().unwrap()).display())
 }
 
 /// A pixel of a PNG file.

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use penumbra::loaders::{load_scene, LoadOptions};
 use penumbra::render::compile::{Assembled, ShaderSource};
+use penumbra::render::shade::ProgramFile;
 use penumbra::render::KernelOptions;
 use penumbra::scene::Features;
 
@@ -154,10 +155,31 @@ impl Workspace {
         match target {
             Target::Wgsl => {
                 let text = String::from_utf8_lossy(data);
+                // The staged renderer (issue 13): Phong and Blinn-Phong are
+                // shade programs of their own; the other shading files are
+                // part of the engine stages.
+                let shade = matches!(name, "phong.wgsl" | "blinn_phong.wgsl");
                 let kernel = self.kernel_with(name, &text);
-                len = kernel.text.len();
+                len = if shade { text.len() } else { kernel.text.len() };
                 judge::start_case();
                 result = penumbra::panics::catch(|| {
+                    if shade {
+                        let file = ProgramFile::User(format!("shading/{name}").into());
+                        let source = penumbra::render::shade::assemble(
+                            &ShaderSource::Embedded,
+                            &file,
+                            &text,
+                        )
+                        .map_err(|e| e.to_string())?;
+                        return source
+                            .assembled
+                            .compile_entry(
+                                &Default::default(),
+                                penumbra::render::shade::SHADE_ENTRY_POINT,
+                            )
+                            .map(|_| ())
+                            .map_err(|e| e.to_string());
+                    }
                     kernel
                         .compile_frame(&self.features, &KernelOptions::default())
                         .map(|_| ())
