@@ -16,13 +16,12 @@ fn gather_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = px.y * push.size.x + px.x;
     let slot = tile_slot(px);
-    let rec = hit_records[slot];
     var value = vec4<f32>(globals.background, 0.0);
-    if rec.kind != KIND_NONE {
+    if hit_records[slot].kind != KIND_NONE {
         value = vec4<f32>(radiance[slot].xyz, 1.0);
     }
     if HAS_AOV && push.pass_index == 0u {
-        write_aov(pixel, rec);
+        write_aov(pixel, hit_records[slot]);
     }
     if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {
         value += image[pixel - push.slot_base];

@@ -17,7 +17,16 @@ fn light_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let slot = tile_slot(px);
-    let rec = hit_records[slot];
+    // Only the members this stage needs (stages/resolve.wgsl says why).
+    let found = hit_records[slot].kind != KIND_NONE;
+    var position = vec3<f32>(0.0);
+    var shading_normal = vec3<f32>(0.0);
+    var geometric_normal = vec3<f32>(0.0);
+    if found {
+        position = hit_records[slot].position;
+        shading_normal = hit_records[slot].shading_normal;
+        geometric_normal = hit_records[slot].geometric_normal;
+    }
     let pixel = px.y * push.size.x + px.x;
     let base = slot * push.sample_count;
     let first = push.sample_first;
@@ -37,13 +46,13 @@ fn light_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             if k >= first && k < end {
                 var entry = vec4<f32>(0.0);
                 var falloff = 0.0;
-                if rec.kind != KIND_NONE {
+                if found {
                     var uv = vec2<f32>(0.5);
                     if HAS_AREA_LIGHTS {
                         uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
                     }
-                    let ls = sample_light(light, rec.position, uv);
-                    if dot(ls.to_light, rec.shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, rec.geometric_normal) > 0.0 {
+                    let ls = sample_light(light, position, uv);
+                    if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, geometric_normal) > 0.0 {
                         entry = vec4<f32>(ls.to_light, ls.distance);
                         falloff = ls.falloff;
                     }

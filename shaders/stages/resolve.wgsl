@@ -13,11 +13,13 @@ fn resolve_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let slot = tile_slot(px);
-    var rec = hit_records[slot];
-    if rec.kind == KIND_NONE {
+    // Member by member: lavapipe loads a storage buffer at a per-lane
+    // address word by word (shaders/texels.wgsl), so a stage reads only the
+    // members it needs.
+    if hit_records[slot].kind == KIND_NONE {
         return;
     }
-    let leaf = resolve_shader(rec.shader, rec.position, rec.geometric_normal);
+    let leaf = resolve_shader(hit_records[slot].shader, hit_records[slot].position, hit_records[slot].geometric_normal);
     let node = shader_nodes[leaf];
     hit_records[slot].shader = leaf;
     hit_records[slot].program = node.program;

@@ -91,12 +91,14 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let local = px - push.tile_origin;
     let slot = local.y * push.tile_width + local.x;
-    let rec = penumbra_hit_records[slot];
-    if rec.kind == penumbra_KIND_NONE || rec.program != push.program {
+    // Member by member, the test first: lavapipe loads a storage buffer at
+    // a per-lane address word by word (shaders/texels.wgsl).
+    if penumbra_hit_records[slot].kind == penumbra_KIND_NONE || penumbra_hit_records[slot].program != push.program {
         return;
     }
-    let s = Surface(rec.position, rec.shading_normal, rec.geometric_normal, rec.to_eye, rec.uv);
-    let p = penumbra_load_params(rec.params);
+    let rec = &penumbra_hit_records[slot];
+    let s = Surface((*rec).position, (*rec).shading_normal, (*rec).geometric_normal, (*rec).to_eye, (*rec).uv);
+    let p = penumbra_load_params((*rec).params);
     var colour = vec3<f32>(0.0);
     if push.sample_first > 0u {
         colour = penumbra_radiance[slot].xyz;

@@ -12,14 +12,15 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     var traced = 0u;
     if in_image(px) {
         let slot = tile_slot(px);
-        let rec = hit_records[slot];
-        if rec.kind != KIND_NONE {
+        // Only the members this stage needs (stages/resolve.wgsl says why).
+        let kind = hit_records[slot].kind;
+        if kind != KIND_NONE {
             var start: Hit;
             start.found = true;
-            start.kind = rec.kind;
-            start.index = rec.index;
-            start.position = rec.position;
-            start.geometric_normal = rec.geometric_normal;
+            start.kind = kind;
+            start.index = hit_records[slot].index;
+            start.position = hit_records[slot].position;
+            start.geometric_normal = hit_records[slot].geometric_normal;
             let base = slot * push.sample_count;
             for (var e = 0u; e < push.sample_count; e++) {
                 if queue_falloff[base + e] > 0.0 {

@@ -269,6 +269,7 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
     let inv = 1.0 / passes as f64;
     let pixels = sum.iter().map(|p| p.map(|c| (c * inv) as f32)).collect();
     Frame {
+        stage_times: Vec::new(),
         image: Image {
             width,
             height,

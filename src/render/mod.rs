@@ -167,6 +167,10 @@ pub struct Frame {
     pub image: Image,
     /// Rays and timings.
     pub stats: RenderStats,
+    /// With [`Renderer::set_profile_stages`]: the time of each pipeline of
+    /// the frame (engine stages by name, `shade <file>`), each dispatch
+    /// submitted and timed on its own; empty otherwise.
+    pub stage_times: Vec<(String, Duration)>,
 }
 
 /// Most samples per pixel.
@@ -390,6 +394,8 @@ pub struct Renderer {
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
     traversal_generation: u64,
+    /// Time each pipeline of a frame on its own (benchmarks).
+    profile_stages: bool,
     /// Set by a successful [`Renderer::reload_shaders`], cleared by an
     /// upload: renders may then reuse the hit records they find (every other
     /// render traces its rays, and counts them).
@@ -439,6 +445,7 @@ impl Renderer {
             stage_buffers: Vec::new(),
             traversal_generation: 0,
             reuse_hits: false,
+            profile_stages: false,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             shaders: opts.shaders.clone(),
@@ -452,6 +459,13 @@ impl Renderer {
     /// unless set).
     pub fn stage_memory(&self) -> u64 {
         self.stage_memory
+    }
+
+    /// Submits and times every dispatch of a frame on its own, filling
+    /// [`RenderStats::stage_times`] (for benchmarks: a frame is then a little
+    /// slower than one submission of the whole chain).
+    pub fn set_profile_stages(&mut self, on: bool) {
+        self.profile_stages = on;
     }
 
     /// Sets the bound on one tile's stage memory (at least
@@ -1078,6 +1092,8 @@ impl Renderer {
         let start = Instant::now();
         let mut passes = 0;
         let light_count = scene.light_count();
+        // Per pipeline: the five engine stages, then the shade programs.
+        let mut stage_times = vec![Duration::ZERO; 5 + programs.len()];
         while first_pass + passes < end_pass {
             let base = PushConstants {
                 size: [width, height],
@@ -1108,10 +1124,10 @@ impl Renderer {
                         tile_width: plan.tile[0],
                         ..base
                     };
-                    let mut pushes: Vec<(&ComputePipeline, PushConstants)> = Vec::new();
+                    let mut pushes: Vec<(usize, &ComputePipeline, PushConstants)> = Vec::new();
                     if !reuse {
-                        pushes.push((stage(Stage::Hit), band));
-                        pushes.push((stage(Stage::Resolve), band));
+                        pushes.push((0, stage(Stage::Hit), band));
+                        pushes.push((1, stage(Stage::Resolve), band));
                     }
                     for &(first, count) in &chunks {
                         let chunk = PushConstants {
@@ -1120,11 +1136,12 @@ impl Renderer {
                             ..band
                         };
                         if !reuse {
-                            pushes.push((stage(Stage::Lights), chunk));
-                            pushes.push((stage(Stage::Shadow), chunk));
+                            pushes.push((2, stage(Stage::Lights), chunk));
+                            pushes.push((3, stage(Stage::Shadow), chunk));
                         }
                         for (i, p) in programs.iter().enumerate() {
                             pushes.push((
+                                5 + i,
                                 p,
                                 PushConstants {
                                     program: i as u32,
@@ -1133,17 +1150,26 @@ impl Renderer {
                             ));
                         }
                     }
-                    pushes.push((stage(Stage::Gather), band));
+                    pushes.push((4, stage(Stage::Gather), band));
                     let chain: Vec<Dispatch> = pushes
                         .iter()
-                        .map(|(pipeline, push)| Dispatch {
+                        .map(|(_, pipeline, push)| Dispatch {
                             pipeline,
                             resources: &refs,
                             push_constants: bytemuck::bytes_of(push),
                             groups,
                         })
                         .collect();
-                    render += ctx.dispatch_chain(&chain)?;
+                    if self.profile_stages {
+                        // One submission per dispatch, timed on its own.
+                        for ((slot, _, _), d) in pushes.iter().zip(&chain) {
+                            let t = ctx.dispatch_chain(std::slice::from_ref(d))?;
+                            stage_times[*slot] += t;
+                            render += t;
+                        }
+                    } else {
+                        render += ctx.dispatch_chain(&chain)?;
+                    }
                 }
             }
             let after = read_counters()?;
@@ -1192,8 +1218,24 @@ impl Renderer {
         ctx.check_validation()?;
         self.stage_buffers[kept].holds = holds;
 
+        let stage_times = match self.profile_stages {
+            false => Vec::new(),
+            true => Stage::FRAME
+                .iter()
+                .map(|s| s.name().to_string())
+                .chain(
+                    scene
+                        .materials
+                        .programs
+                        .iter()
+                        .map(|p| format!("shade {}", p.file.label())),
+                )
+                .zip(stage_times)
+                .collect(),
+        };
         Ok(Some((
             Frame {
+                stage_times,
                 image: Image {
                     width,
                     height: rows.end - rows.start,
@@ -1207,6 +1249,7 @@ impl Renderer {
                     bvh_depth: scene.bvh_depth,
                     bvh_bytes: scene.bvh_bytes,
                     hits_reused: reuse,
+
                     tiles: tiles.len(),
                     stage_bytes: plan.bytes(),
                     timings: Timings {

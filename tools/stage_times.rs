@@ -1,0 +1,74 @@
+//! Where a staged frame's time goes: renders a scene with every pipeline
+//! submitted and timed on its own (`Renderer::set_profile_stages`), several
+//! frames, and prints each pipeline's median with the machine it ran on.
+//!
+//! ```sh
+//! cargo run --release --example stage_times -- scenes/bunny_scene.glb [FRAMES]
+//! ```
+
+use std::time::Duration;
+
+use penumbra::loaders::{self, LoadOptions};
+use penumbra::render::{Renderer, RendererOptions};
+
+fn main() -> anyhow::Result<()> {
+    let mut args = std::env::args().skip(1);
+    let path = args
+        .next()
+        .unwrap_or_else(|| "scenes/bunny_scene.glb".to_string());
+    let frames: usize = match args.next() {
+        Some(n) => n.parse()?,
+        None => 7,
+    };
+    let scene = loaders::load_scene(std::path::Path::new(&path), &LoadOptions::default())?.scene;
+    let mut r = Renderer::new(&RendererOptions::default())?;
+    r.set_profile_stages(true);
+    let up = r.upload(&scene)?;
+    let (w, h) = up.size();
+    // The first frame compiles the pipelines.
+    let first = r.render_uploaded(&up, w, h)?;
+    let mut times: Vec<Vec<Duration>> = vec![Vec::new(); first.stage_times.len()];
+    let mut totals = Vec::new();
+    for _ in 0..frames {
+        let f = r.render_uploaded(&up, w, h)?;
+        for (i, (_, t)) in f.stage_times.iter().enumerate() {
+            times[i].push(*t);
+        }
+        totals.push(f.stats.timings.render);
+    }
+    let median = |v: &mut Vec<Duration>| {
+        v.sort();
+        v[v.len() / 2]
+    };
+    let cpu = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let field = |k: &str| {
+        cpu.lines()
+            .find(|l| l.starts_with(k))
+            .and_then(|l| l.split(':').nth(1))
+            .map(str::trim)
+            .unwrap_or("?")
+            .to_string()
+    };
+    let avx512 = field("flags").contains("avx512f");
+    println!(
+        "{path} at {w}x{h}, {} tiles of {:.1} MiB stage memory, {frames} frames",
+        first.stats.tiles,
+        first.stats.stage_bytes as f64 / 1048576.0
+    );
+    println!(
+        "machine: {} (family {}, model {}, AVX-512: {avx512}); device: {}",
+        field("model name"),
+        field("cpu family"),
+        field("model\t"),
+        r.device().name
+    );
+    for (i, (name, _)) in first.stage_times.iter().enumerate() {
+        println!("  {name:<40} {:>8.1} ms", median(&mut times[i]).as_secs_f64() * 1e3);
+    }
+    println!(
+        "  {:<40} {:>8.1} ms (median of the frames' render phase)",
+        "all",
+        median(&mut totals).as_secs_f64() * 1e3
+    );
+    Ok(())
+}
