@@ -63,7 +63,10 @@ fn main() -> anyhow::Result<()> {
         r.device().name
     );
     for (i, (name, _)) in first.stage_times.iter().enumerate() {
-        println!("  {name:<40} {:>8.1} ms", median(&mut times[i]).as_secs_f64() * 1e3);
+        println!(
+            "  {name:<40} {:>8.1} ms",
+            median(&mut times[i]).as_secs_f64() * 1e3
+        );
     }
     println!(
         "  {:<40} {:>8.1} ms (median of the frames' render phase)",

@@ -45,9 +45,10 @@ struct HitRecord {
 @group(0) @binding(14) var<storage, read_write> hit_records: array<HitRecord>;
 // Queued shadow rays: (unit direction to the light, distance to it).
 @group(0) @binding(15) var<storage, read_write> queue_rays: array<vec4<f32>>;
-// The light's falloff at the point for each queued sample; 0 where the
-// sample is below the surface or occluded (nothing to add).
-@group(0) @binding(16) var<storage, read_write> queue_falloff: array<f32>;
+// Each queued sample's light: (falloff at the point, the light's index as
+// bits). Falloff 0 where the sample is below the surface or occluded:
+// nothing to add.
+@group(0) @binding(16) var<storage, read_write> queue_samples: array<vec2<f32>>;
 // Per tile pixel: the colour the shade stage sums.
 @group(0) @binding(17) var<storage, read_write> radiance: array<vec4<f32>>;
 

@@ -2,10 +2,11 @@
 // file with shading/interface.wgsl, the shader file, and the parameter
 // loader it generates from the file's `struct Params` (src/render/shade.rs):
 //   fn penumbra_load_params(at: u32) -> Params
-//   fn penumbra_ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32>
+//   fn penumbra_ambient_sum(s: Surface, p: Params) -> vec3<f32>
+// (the sum of the file's `ambient` over the lights, or 0 without one)
 // Every name here starts with `penumbra_`, so no shader file can collide
-// with the engine. The stage traces nothing: it sums, for each light, the
-// shader's ambient term and its `shade` of every queued light sample that
+// with the engine. The stage traces nothing: it sums the shader's ambient
+// term of every light and its `shade` of every queued light sample that
 // reached the point (the shadow stage zeroed the others).
 //
 // The structs below mirror HitRecord (stages/records.wgsl), Light
@@ -65,7 +66,7 @@ struct penumbra_PushConstants {
 @group(0) @binding(5) var<storage, read> penumbra_lights: array<penumbra_Light>;
 @group(0) @binding(14) var<storage, read> penumbra_hit_records: array<penumbra_HitRecord>;
 @group(0) @binding(15) var<storage, read> penumbra_queue_rays: array<vec4<f32>>;
-@group(0) @binding(16) var<storage, read> penumbra_queue_falloff: array<f32>;
+@group(0) @binding(16) var<storage, read> penumbra_queue_samples: array<vec2<f32>>;
 @group(0) @binding(17) var<storage, read_write> penumbra_radiance: array<vec4<f32>>;
 // Every leaf shader's parameters, packed as 32-bit words in the order of
 // its Params fields (a vecN takes N words).
@@ -78,9 +79,6 @@ const penumbra_KIND_NONE: u32 = 0xffffffffu;
 
 @compute @workgroup_size(8, 8, 1)
 fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    // Before any branch: lavapipe loads a uniform address once per SIMD
-    // group only outside branches and loops (lights.wgsl: first_light).
-    let first_light = penumbra_lights[0];
     let push = penumbra_push;
     if (push.flags & penumbra_FLAG_WARM_UP) != 0u {
         return;
@@ -99,39 +97,21 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let rec = &penumbra_hit_records[slot];
     let s = Surface((*rec).position, (*rec).shading_normal, (*rec).geometric_normal, (*rec).to_eye, (*rec).uv);
     let p = penumbra_load_params((*rec).params);
-    var colour = vec3<f32>(0.0);
-    if push.sample_first > 0u {
+    // The ambient terms with the first chunk of samples, then the samples
+    // that reached the point (the shadow stage zeroed the others' falloff).
+    var colour: vec3<f32>;
+    if push.sample_first == 0u {
+        colour = penumbra_ambient_sum(s, p);
+    } else {
         colour = penumbra_radiance[slot].xyz;
     }
-    let first = push.sample_first;
-    let end = first + push.sample_count;
     let base = slot * push.sample_count;
-    var k = 0u;
-    for (var i = 0u; i < push.light_count && k < end; i++) {
-        var light = first_light;
-        if i > 0u {
-            light = penumbra_lights[i];
-        }
-        let count = light.samples;
-        if k + count <= first {
-            k += count;
-            continue;
-        }
-        // The ambient term counts once per light, also for area lights:
-        // with the chunk that holds the light's first sample.
-        if k >= first {
-            colour += penumbra_ambient(s, light.ambient, p);
-        }
-        for (var j = 0u; j < count; j++) {
-            if k >= first && k < end {
-                let falloff = penumbra_queue_falloff[base + k - first];
-                if falloff > 0.0 {
-                    let ray = penumbra_queue_rays[base + k - first];
-                    let l = LightSample(ray.xyz, falloff * light.intensity, light.diffuse, light.specular);
-                    colour += shade(s, l, p);
-                }
-            }
-            k++;
+    for (var e = 0u; e < push.sample_count; e++) {
+        let sample = penumbra_queue_samples[base + e];
+        if sample.x > 0.0 {
+            let light = &penumbra_lights[bitcast<u32>(sample.y)];
+            let l = LightSample(penumbra_queue_rays[base + e].xyz, sample.x * (*light).intensity, (*light).diffuse, (*light).specular);
+            colour += shade(s, l, p);
         }
     }
     penumbra_radiance[slot] = vec4<f32>(colour, 1.0);

@@ -1,10 +1,17 @@
-// Stage 4, shadows: any-hit traversal of the queued shadow rays of each
-// pixel (adjacent pixels trace the same light sample together, so the rays
-// of a SIMD group are coherent). An occluded sample's falloff becomes 0: the
-// shade stage adds the contribution of every sample that reaches its light.
+// Stage 3, light samples and shadows: for each light sample of the chunk
+// the queue holds, the direction and distance to the light and its falloff
+// at the hit point, and an any-hit traversal of its shadow ray. A sample
+// below the geometric surface or the shading normal needs no ray (the
+// surface itself is in the way); it and an occluded one get falloff 0, so
+// the shade stage adds the contribution of every sample that reaches its
+// light. Nothing here depends on a shader: after a shading edit the queue is
+// still valid. Adjacent pixels trace the same light sample together, so the
+// rays of a SIMD group are coherent.
 
 @compute @workgroup_size(8, 8, 1)
 fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    // Before any branch (see first_light).
+    first_light = lights[0];
     if (push.flags & FLAG_WARM_UP) != 0u {
         return;
     }
@@ -14,22 +21,53 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         let slot = tile_slot(px);
         // Only the members this stage needs (stages/resolve.wgsl says why).
         let kind = hit_records[slot].kind;
-        if kind != KIND_NONE {
-            var start: Hit;
-            start.found = true;
-            start.kind = kind;
+        var start: Hit;
+        start.found = kind != KIND_NONE;
+        start.kind = kind;
+        var shading_normal = vec3<f32>(0.0);
+        if start.found {
             start.index = hit_records[slot].index;
             start.position = hit_records[slot].position;
             start.geometric_normal = hit_records[slot].geometric_normal;
-            let base = slot * push.sample_count;
-            for (var e = 0u; e < push.sample_count; e++) {
-                if queue_falloff[base + e] > 0.0 {
-                    traced += 1u;
-                    let ray = queue_rays[base + e];
-                    if occluded(start, ray.xyz, ray.w) {
-                        queue_falloff[base + e] = 0.0;
+            shading_normal = hit_records[slot].shading_normal;
+        }
+        let pixel = px.y * push.size.x + px.x;
+        let base = slot * push.sample_count;
+        let first = push.sample_first;
+        let end = first + push.sample_count;
+        var k = 0u;
+        for (var i = 0u; i < globals.num_lights && k < end; i++) {
+            var light = first_light;
+            if i > 0u {
+                light = lights[i];
+            }
+            let count = light_sample_count(light);
+            if k + count <= first {
+                k += count;
+                continue;
+            }
+            for (var j = 0u; j < count; j++) {
+                if k >= first && k < end {
+                    var ray = vec4<f32>(0.0);
+                    var falloff = 0.0;
+                    if start.found {
+                        var uv = vec2<f32>(0.5);
+                        if HAS_AREA_LIGHTS {
+                            uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
+                        }
+                        let ls = sample_light(light, start.position, uv);
+                        if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
+                            traced += 1u;
+                            if !occluded(start, ls.to_light, ls.distance) {
+                                ray = vec4<f32>(ls.to_light, ls.distance);
+                                falloff = ls.falloff;
+                            }
+                        }
                     }
+                    queue_rays[base + k - first] = ray;
+                    queue_samples[base + k - first] = vec2<f32>(falloff, bitcast<f32>(i));
                 }
+                k++;
             }
         }
     }

@@ -376,7 +376,7 @@ struct StageBuffers {
     plan: TilePlan,
     hits: Buffer,
     queue_rays: Buffer,
-    queue_falloff: Buffer,
+    queue_samples: Buffer,
     radiance: Buffer,
     holds: Option<HitKey>,
 }
@@ -688,7 +688,7 @@ impl Renderer {
             plan,
             hits: storage("hit records", px * tiles::HIT_RECORD_BYTES)?,
             queue_rays: storage("queued rays", entries * 16)?,
-            queue_falloff: storage("queued falloff", entries * 4)?,
+            queue_samples: storage("queued samples", entries * 8)?,
             radiance: storage("colour sums", px * tiles::RADIANCE_BYTES)?,
             holds: None,
         });
@@ -815,7 +815,7 @@ impl Renderer {
             // The tile's stage buffers: placeholders, replaced per render.
             b(ctx.create_buffer("hit records", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("queued rays", BufferUsage::Storage, 16)?),
-            b(ctx.create_buffer("queued falloff", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("queued samples", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("colour sums", BufferUsage::Storage, 16)?),
             b(params_buffer(ctx, &materials)?),
         ];
@@ -1070,7 +1070,7 @@ impl Renderer {
         }
         refs[Binding::HitRecords as usize] = (&buffers.hits).into();
         refs[Binding::QueueRays as usize] = (&buffers.queue_rays).into();
-        refs[Binding::QueueFalloff as usize] = (&buffers.queue_falloff).into();
+        refs[Binding::QueueSamples as usize] = (&buffers.queue_samples).into();
         refs[Binding::Radiance as usize] = (&buffers.radiance).into();
         let stage = |s: Stage| &self.stage_pipelines[&(s, stage_kernel)].pipeline;
         let programs: Vec<&ComputePipeline> = scene
@@ -1092,8 +1092,9 @@ impl Renderer {
         let start = Instant::now();
         let mut passes = 0;
         let light_count = scene.light_count();
-        // Per pipeline: the five engine stages, then the shade programs.
-        let mut stage_times = vec![Duration::ZERO; 5 + programs.len()];
+        // Per pipeline: the engine stages, then the shade programs.
+        let engine = Stage::FRAME.len();
+        let mut stage_times = vec![Duration::ZERO; engine + programs.len()];
         while first_pass + passes < end_pass {
             let base = PushConstants {
                 size: [width, height],
@@ -1136,12 +1137,11 @@ impl Renderer {
                             ..band
                         };
                         if !reuse {
-                            pushes.push((2, stage(Stage::Lights), chunk));
-                            pushes.push((3, stage(Stage::Shadow), chunk));
+                            pushes.push((2, stage(Stage::Shadow), chunk));
                         }
                         for (i, p) in programs.iter().enumerate() {
                             pushes.push((
-                                5 + i,
+                                engine + i,
                                 p,
                                 PushConstants {
                                     program: i as u32,
@@ -1150,7 +1150,7 @@ impl Renderer {
                             ));
                         }
                     }
-                    pushes.push((4, stage(Stage::Gather), band));
+                    pushes.push((3, stage(Stage::Gather), band));
                     let chain: Vec<Dispatch> = pushes
                         .iter()
                         .map(|(_, pipeline, push)| Dispatch {

@@ -140,7 +140,8 @@ fn file_error(e: ShaderFileError) -> CompileError {
     }
 }
 
-/// The loader of `Params` from the packed words, and the ambient call.
+/// The loader of `Params` from the packed words, and the sum of the
+/// file's `ambient` over the lights.
 fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> String {
     let mut out = String::new();
     let mut at = 0u32;
@@ -170,14 +171,14 @@ fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> Str
         "fn penumbra_load_params(at: u32) -> Params {{\n    return Params({});\n}}",
         args.join(", ")
     );
-    let body = if has_ambient {
-        "ambient(s, light_ambient, p)"
+    let sum = if has_ambient {
+        "    var sum = vec3<f32>(0.0);\n    for (var i = 0u; i < penumbra_push.light_count; i++) {\n        sum += ambient(s, penumbra_lights[i].ambient, p);\n    }\n    return sum;"
     } else {
-        "vec3<f32>(0.0)"
+        "    return vec3<f32>(0.0);"
     };
     let _ = writeln!(
         out,
-        "fn penumbra_ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {{\n    return {body};\n}}"
+        "fn penumbra_ambient_sum(s: Surface, p: Params) -> vec3<f32> {{\n{sum}\n}}"
     );
     out
 }

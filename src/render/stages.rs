@@ -5,9 +5,10 @@
 //! A frame runs as a chain of compute pipelines, after the wavefront design of
 //! pbrt-v4's GPU integrator (Laine, Karras and Aila, "Megakernels Considered
 //! Harmful", HPG 2013): camera rays and closest hit write hit records,
-//! material resolve picks each hit's leaf shader, light sampling queues the
-//! shadow rays, the shadow stage traces them, one shade pipeline per shader
-//! file sums the contributions, and gather writes the image and the AOVs.
+//! material resolve picks each hit's leaf shader, the shadow stage samples
+//! the lights and traces each sample's shadow ray, one shade pipeline per
+//! shader file sums the contributions of the samples that reach the point,
+//! and gather writes the image and the AOVs.
 //! Each stage is compiled from only the files it needs, so an edit
 //! recompiles only the stages that include the edited file.
 
@@ -45,7 +46,6 @@ shader_files![
     "stages/records.wgsl",
     "stages/hit.wgsl",
     "stages/resolve.wgsl",
-    "stages/lights.wgsl",
     "stages/shadow.wgsl",
     "stages/gather.wgsl",
     "stages/shade.wgsl",
@@ -88,9 +88,8 @@ pub enum Stage {
     Hit,
     /// Material resolve: checkers select the leaf shader of each hit.
     Resolve,
-    /// Light sampling: queues each light sample's shadow ray.
-    Lights,
-    /// Any-hit traversal of the queued shadow rays.
+    /// Light sampling and the any-hit traversal of each sample's shadow
+    /// ray: queues the samples that reach the point.
     Shadow,
     /// Writes (or adds) each pixel's colour to the image; writes the AOVs.
     Gather,
@@ -101,20 +100,13 @@ pub enum Stage {
 impl Stage {
     /// The stages of a frame, in order (the shade pipelines run between
     /// [`Stage::Shadow`] and [`Stage::Gather`]).
-    pub const FRAME: [Stage; 5] = [
-        Stage::Hit,
-        Stage::Resolve,
-        Stage::Lights,
-        Stage::Shadow,
-        Stage::Gather,
-    ];
+    pub const FRAME: [Stage; 4] = [Stage::Hit, Stage::Resolve, Stage::Shadow, Stage::Gather];
 
     /// The stage's name in reload reports.
     pub fn name(self) -> &'static str {
         match self {
             Stage::Hit => "hit",
             Stage::Resolve => "resolve",
-            Stage::Lights => "lights",
             Stage::Shadow => "shadow",
             Stage::Gather => "gather",
             Stage::Trace => "trace",
@@ -126,7 +118,6 @@ impl Stage {
         match self {
             Stage::Hit => "hit_stage",
             Stage::Resolve => "resolve_stage",
-            Stage::Lights => "light_stage",
             Stage::Shadow => "shadow_stage",
             Stage::Gather => "gather_stage",
             Stage::Trace => "trace",
@@ -142,8 +133,7 @@ impl Stage {
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
             ],
-            Stage::Lights => &["lights.wgsl", "sampling.wgsl", "stages/lights.wgsl"],
-            Stage::Shadow => &["stages/shadow.wgsl"],
+            Stage::Shadow => &["lights.wgsl", "sampling.wgsl", "stages/shadow.wgsl"],
             Stage::Gather => &["aov.wgsl", "stages/gather.wgsl"],
             Stage::Trace => &["queries.wgsl"],
         };
@@ -213,8 +203,8 @@ pub enum Binding {
     HitRecords,
     /// The tile's queued shadow rays.
     QueueRays,
-    /// The falloff of each queued light sample (0: nothing to add).
-    QueueFalloff,
+    /// Each queued light sample's falloff (0: nothing to add) and light.
+    QueueSamples,
     /// The tile's per-pixel colour sums.
     Radiance,
     /// Every leaf shader's parameter words.
@@ -256,7 +246,7 @@ pub const BINDINGS: [BindingInfo; 19] = {
         b(Binding::Aovs, "aovs", StorageReadWrite),
         b(Binding::HitRecords, "hit_records", StorageReadWrite),
         b(Binding::QueueRays, "queue_rays", StorageReadWrite),
-        b(Binding::QueueFalloff, "queue_falloff", StorageReadWrite),
+        b(Binding::QueueSamples, "queue_samples", StorageReadWrite),
         b(Binding::Radiance, "radiance", StorageReadWrite),
         b(Binding::Params, "params", StorageReadOnly),
     ]

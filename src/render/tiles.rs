@@ -11,8 +11,9 @@
 pub const HIT_RECORD_BYTES: u64 = 96;
 /// Bytes of one pixel's colour sum.
 pub const RADIANCE_BYTES: u64 = 16;
-/// Bytes of one queued light sample: direction and distance, and falloff.
-pub const QUEUE_ENTRY_BYTES: u64 = 20;
+/// Bytes of one queued light sample: direction and distance, falloff and
+/// light.
+pub const QUEUE_ENTRY_BYTES: u64 = 24;
 /// Most light samples per pixel one chunk holds.
 pub const MAX_CHUNK: u32 = 64;
 /// The default bound on a tile's stage memory: 128 MiB.
