@@ -3,8 +3,12 @@
 //! frames, and prints each pipeline's median with the machine it ran on.
 //!
 //! ```sh
-//! cargo run --release --example stage_times -- scenes/bunny_scene.glb [FRAMES]
+//! cargo run --release --example stage_times -- scenes/bunny_scene.glb [FRAMES] [WxH]
 //! ```
+//!
+//! With `WxH` the scene renders at that size (its field of view kept):
+//! the tile count and stage memory then show how the memory bound tiles
+//! large images.
 
 use std::time::Duration;
 
@@ -20,7 +24,15 @@ fn main() -> anyhow::Result<()> {
         Some(n) => n.parse()?,
         None => 7,
     };
-    let scene = loaders::load_scene(std::path::Path::new(&path), &LoadOptions::default())?.scene;
+    let mut load = LoadOptions::default();
+    if let Some(size) = args.next() {
+        let (w, h) = size
+            .split_once('x')
+            .ok_or_else(|| anyhow::anyhow!("size: expected WxH, got {size}"))?;
+        load.width = Some(w.parse()?);
+        load.height = Some(h.parse()?);
+    }
+    let scene = loaders::load_scene(std::path::Path::new(&path), &load)?.scene;
     let mut r = Renderer::new(&RendererOptions::default())?;
     r.set_profile_stages(true);
     let up = r.upload(&scene)?;
