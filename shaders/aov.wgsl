@@ -1,6 +1,6 @@
 // Arbitrary output variables: what the primary ray of each pixel saw,
 // written by the first pass only (pixel centre when there is one sample),
-// from the hit records (stages/gather.wgsl).
+// by the hit stage (stages/hit.wgsl).
 
 // Mirrored by render::layout::Aov. Misses: depth +inf, normal 0, uv 0,
 // object and primitive 0xffffffff.
@@ -22,11 +22,15 @@ struct Aov {
 
 @group(0) @binding(13) var<storage, read_write> aovs: array<Aov>;
 
-fn write_aov(pixel: u32, rec: HitRecord) {
+fn write_aov(pixel: u32, hit: Hit) {
     var out = Aov(bitcast<f32>(0x7f800000u), 0.0, 0.0, 0.0, 0.0, 0.0, 0xffffffffu, 0xffffffffu);
-    if rec.kind != KIND_NONE {
-        let n = rec.geometric_normal;
-        out = Aov(rec.t, n.x, n.y, n.z, rec.bary.x, rec.bary.y, rec.object, rec.index);
+    if hit.found {
+        let n = hit.geometric_normal;
+        var uv = vec2<f32>(0.0);
+        if hit.kind == KIND_TRIANGLE {
+            uv = vec2<f32>(hit.u, hit.v);
+        }
+        out = Aov(hit.t, n.x, n.y, n.z, uv.x, uv.y, hit.object, hit.index);
     }
     aovs[pixel] = out;
 }

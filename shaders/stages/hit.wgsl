@@ -1,10 +1,12 @@
 // Stage 1, camera rays and closest hit: one invocation per pixel of the
-// band; writes the pixel's hit record.
+// band; writes the pixel's hit record (and, when asked for, its AOVs).
+
+@group(0) @binding(14) var hit_records_out: texture_storage_2d<rgba32uint, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     // The warm-up dispatch makes the driver compile the stage (lavapipe
-    // compiles at the first dispatch) without touching any buffer.
+    // compiles at the first dispatch) without touching any resource.
     if (push.flags & FLAG_WARM_UP) != 0u {
         return;
     }
@@ -20,26 +22,19 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let ray = primary_ray(globals.camera, px, push.size, sub);
         let hit = closest_hit(ray);
-        var rec: HitRecord;
-        rec.kind = KIND_NONE;
-        rec.t = bitcast<f32>(0x7f800000u);
-        rec.object = 0xffffffffu;
-        rec.index = 0xffffffffu;
+        let slot = tile_slot(px);
         if hit.found {
-            rec.position = hit.position;
-            rec.t = hit.t;
-            rec.geometric_normal = hit.geometric_normal;
-            rec.kind = hit.kind;
-            rec.shading_normal = hit.shading_normal;
-            rec.index = hit.index;
-            rec.to_eye = -ray.dir;
-            rec.object = hit.object;
-            if hit.kind == KIND_TRIANGLE {
-                rec.bary = vec2<f32>(hit.u, hit.v);
-            }
-            rec.shader = hit.shader;
+            textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(bitcast<vec3<u32>>(hit.position), hit.kind));
+            textureStore(hit_records_out, record_texel(slot, 1u), vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
+            textureStore(hit_records_out, record_texel(slot, 2u), vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
+            textureStore(hit_records_out, record_texel(slot, 3u), vec4<u32>(bitcast<vec3<u32>>(-ray.dir), 0u));
+            textureStore(hit_records_out, record_texel(slot, 4u), vec4<u32>(0u));
+        } else {
+            textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(0u, 0u, 0u, KIND_NONE));
         }
-        hit_records[tile_slot(px)] = rec;
+        if HAS_AOV && push.pass_index == 0u {
+            write_aov(pixel, hit);
+        }
         primary = 1u;
     }
     count_rays(0u, primary);

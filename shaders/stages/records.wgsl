@@ -1,6 +1,9 @@
 // Hit records and the light-sample queue: what the stages of a frame pass
-// each other, for one tile of the image (the host sizes the buffers per
-// tile within a memory bound: src/render/tiles.rs).
+// each other, for one tile of the image (the host sizes them per tile within
+// a memory bound: src/render/tiles.rs). They are texel images, not storage
+// buffers: lavapipe loads a storage buffer at a per-lane address as a loop
+// over the SIMD lanes, while a texel load is straight-line SIMD code
+// (texels.wgsl), which also makes the stages faster to compile.
 //
 // Pixel `px` of the tile has record `tile_slot(px)`; light sample `k` of the
 // pixel (lights in scene order, each light's samples in turn) has queue
@@ -14,45 +17,39 @@ const KIND_TRIANGLE: u32 = 2u;
 // A hit that matches no primitive: the ray hit nothing.
 const KIND_NONE: u32 = 0xffffffffu;
 
-// Mirrored by render::layout::HitRecord (and by penumbra_HitRecord in
-// stages/shade.wgsl, which a shader file is compiled with).
-struct HitRecord {
-    position: vec3<f32>,
-    // Distance along the primary ray.
-    t: f32,
-    // Unit, facing the viewer.
-    geometric_normal: vec3<f32>,
-    // Primitive kind (hit.wgsl); KIND_NONE where the ray hit nothing.
-    kind: u32,
-    // Unit, facing the viewer.
-    shading_normal: vec3<f32>,
-    // Index among the primitives of its kind.
-    index: u32,
-    to_eye: vec3<f32>,
-    object: u32,
-    // Texture coordinates ((0, 0) where the primitive has none).
-    uv: vec2<f32>,
-    // Barycentric u, v of triangle hits.
-    bary: vec2<f32>,
-    // The scene's shader at the hit; after material resolve the leaf shader
-    // (checkers resolved), its program and the offset of its parameters.
-    shader: u32,
-    program: u32,
-    params: u32,
-    _pad: u32,
-}
+// A hit record (render::layout::RECORD_TEXELS texels at binding 14):
+//   0: position (camera-relative), kind (KIND_NONE: the ray hit nothing)
+//   1: unit geometric normal facing the viewer, primitive index
+//   2: unit shading normal facing the viewer, the scene's shader
+//   3: unit vector to the eye, 0
+//   4: texture coordinates ((0, 0) where the primitive has none), 0, 0
+const RECORD_TEXELS: u32 = 5u;
+// Material resolve's result (1 texel a record at binding 16): the leaf
+// shader, its program, the first of its parameter words, 0.
+// A queue entry (render::layout::QUEUE_TEXELS texels at binding 15):
+//   0: unit direction to the light, distance to it
+//   1: falloff at the point (0: below the surface or occluded, nothing to
+//      add), the light's index, 0, 0
+const QUEUE_TEXELS: u32 = 2u;
 
-@group(0) @binding(14) var<storage, read_write> hit_records: array<HitRecord>;
-// Queued shadow rays: (unit direction to the light, distance to it).
-@group(0) @binding(15) var<storage, read_write> queue_rays: array<vec4<f32>>;
-// Each queued sample's light: (falloff at the point, the light's index as
-// bits). Falloff 0 where the sample is below the surface or occluded:
-// nothing to add.
-@group(0) @binding(16) var<storage, read_write> queue_samples: array<vec2<f32>>;
+// The records, for the stages that read them (the hit stage writes them as
+// `hit_records_out`: a stage that writes a stage image names it `<name>_out`).
+@group(0) @binding(14) var hit_records: texture_storage_2d<rgba32uint, read>;
+
 // Per tile pixel: the colour the shade stage sums.
 @group(0) @binding(17) var<storage, read_write> radiance: array<vec4<f32>>;
 
 fn tile_slot(px: vec2<u32>) -> u32 {
     let local = px - push.tile_origin;
     return local.y * push.tile_width + local.x;
+}
+
+// Texel `i` of record `slot`.
+fn record_texel(slot: u32, i: u32) -> vec2<u32> {
+    return texel(slot * RECORD_TEXELS + i);
+}
+
+// Texel `i` of queue entry `entry`.
+fn queue_texel(entry: u32, i: u32) -> vec2<u32> {
+    return texel(entry * QUEUE_TEXELS + i);
 }

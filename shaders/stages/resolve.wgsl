@@ -1,7 +1,9 @@
 // Stage 2, material resolve: the checker is a selector between shaders, so
 // each hit's shader is walked down its (possibly nested) checkers to the
 // leaf shader at the hit point, whose program and parameters the shade stage
-// then reads from the record.
+// then reads.
+
+@group(0) @binding(16) var resolved: texture_storage_2d<rgba32uint, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn resolve_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -13,15 +15,13 @@ fn resolve_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let slot = tile_slot(px);
-    // Member by member: lavapipe loads a storage buffer at a per-lane
-    // address word by word (shaders/texels.wgsl), so a stage reads only the
-    // members it needs.
-    if hit_records[slot].kind == KIND_NONE {
+    let t0 = textureLoad(hit_records, record_texel(slot, 0u));
+    if t0.w == KIND_NONE {
         return;
     }
-    let leaf = resolve_shader(hit_records[slot].shader, hit_records[slot].position, hit_records[slot].geometric_normal);
+    let t1 = textureLoad(hit_records, record_texel(slot, 1u));
+    let shader = textureLoad(hit_records, record_texel(slot, 2u)).w;
+    let leaf = resolve_shader(shader, bitcast<vec3<f32>>(t0.xyz), bitcast<vec3<f32>>(t1.xyz));
     let node = shader_nodes[leaf];
-    hit_records[slot].shader = leaf;
-    hit_records[slot].program = node.program;
-    hit_records[slot].params = node.params;
+    textureStore(resolved, texel(slot), vec4<u32>(leaf, node.program, node.params, 0u));
 }

@@ -9,43 +9,8 @@
 // term of every light and its `shade` of every queued light sample that
 // reached the point (the shadow stage zeroed the others).
 //
-// The structs below mirror HitRecord (stages/records.wgsl), Light
-// (lights.wgsl) and PushConstants (render.wgsl); the layout test in
-// src/render/layout.rs checks all of them against the host's.
-
-struct penumbra_HitRecord {
-    position: vec3<f32>,
-    t: f32,
-    geometric_normal: vec3<f32>,
-    kind: u32,
-    shading_normal: vec3<f32>,
-    index: u32,
-    to_eye: vec3<f32>,
-    object: u32,
-    uv: vec2<f32>,
-    bary: vec2<f32>,
-    shader: u32,
-    program: u32,
-    params: u32,
-    _pad: u32,
-}
-
-struct penumbra_Light {
-    position: vec3<f32>,
-    kind: u32,
-    direction: vec3<f32>,
-    cone_scale: f32,
-    ambient: vec3<f32>,
-    cone_offset: f32,
-    diffuse: vec3<f32>,
-    samples: u32,
-    specular: vec3<f32>,
-    radius: f32,
-    edge1: vec3<f32>,
-    intensity: f32,
-    edge2: vec3<f32>,
-    _pad1: u32,
-}
+// penumbra_PushConstants mirrors PushConstants (render.wgsl); the layout
+// test in src/render/layout.rs checks it against the host's.
 
 struct penumbra_PushConstants {
     origin: vec2<u32>,
@@ -63,19 +28,34 @@ struct penumbra_PushConstants {
     _pad0: u32,
 }
 
-@group(0) @binding(5) var<storage, read> penumbra_lights: array<penumbra_Light>;
-@group(0) @binding(14) var<storage, read> penumbra_hit_records: array<penumbra_HitRecord>;
-@group(0) @binding(15) var<storage, read> penumbra_queue_rays: array<vec4<f32>>;
-@group(0) @binding(16) var<storage, read> penumbra_queue_samples: array<vec2<f32>>;
+// The hit records, material resolve's result and the queue (texel images:
+// stages/records.wgsl), every leaf's parameters (4-word aligned, one texel
+// per 4 words of its Params) and each light's colours (3 texels: diffuse and
+// intensity, specular, ambient).
+@group(0) @binding(14) var penumbra_hit_records: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(15) var penumbra_queue: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(16) var penumbra_resolved: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(17) var<storage, read_write> penumbra_radiance: array<vec4<f32>>;
-// Every leaf shader's parameters, packed as 32-bit words in the order of
-// its Params fields (a vecN takes N words).
-@group(0) @binding(18) var<storage, read> penumbra_params: array<u32>;
+@group(0) @binding(18) var penumbra_params: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(19) var penumbra_light_colours: texture_storage_2d<rgba32uint, read>;
 var<immediate> penumbra_push: penumbra_PushConstants;
 
-// render.wgsl's FLAG_WARM_UP and KIND_NONE of stages/records.wgsl.
+// render.wgsl's FLAG_WARM_UP, stages/records.wgsl's KIND_NONE, RECORD_TEXELS
+// and QUEUE_TEXELS, and texels.wgsl's TEXEL_ROW (checked against them by
+// src/render/layout.rs).
 const penumbra_FLAG_WARM_UP: u32 = 1u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
+const penumbra_RECORD_TEXELS: u32 = 5u;
+const penumbra_QUEUE_TEXELS: u32 = 2u;
+const penumbra_TEXEL_ROW_SHIFT: u32 = 12u;
+
+fn penumbra_texel(i: u32) -> vec2<u32> {
+    return vec2<u32>(i & ((1u << penumbra_TEXEL_ROW_SHIFT) - 1u), i >> penumbra_TEXEL_ROW_SHIFT);
+}
+
+fn penumbra_f3(t: vec4<u32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(t.xyz);
+}
 
 @compute @workgroup_size(8, 8, 1)
 fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -89,14 +69,18 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let local = px - push.tile_origin;
     let slot = local.y * push.tile_width + local.x;
-    // Member by member, the test first: lavapipe loads a storage buffer at
-    // a per-lane address word by word (shaders/texels.wgsl).
-    if penumbra_hit_records[slot].kind == penumbra_KIND_NONE || penumbra_hit_records[slot].program != push.program {
+    let r = slot * penumbra_RECORD_TEXELS;
+    let t0 = textureLoad(penumbra_hit_records, penumbra_texel(r));
+    let material = textureLoad(penumbra_resolved, penumbra_texel(slot));
+    if t0.w == penumbra_KIND_NONE || material.y != push.program {
         return;
     }
-    let rec = &penumbra_hit_records[slot];
-    let s = Surface((*rec).position, (*rec).shading_normal, (*rec).geometric_normal, (*rec).to_eye, (*rec).uv);
-    let p = penumbra_load_params((*rec).params);
+    let ng = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 1u)));
+    let ns = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 2u)));
+    let to_eye = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 3u)));
+    let uv = bitcast<vec2<f32>>(textureLoad(penumbra_hit_records, penumbra_texel(r + 4u)).xy);
+    let s = Surface(penumbra_f3(t0), ns, ng, to_eye, uv);
+    let p = penumbra_load_params(material.z);
     // The ambient terms with the first chunk of samples, then the samples
     // that reached the point (the shadow stage zeroed the others' falloff).
     var colour: vec3<f32>;
@@ -107,10 +91,14 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let base = slot * push.sample_count;
     for (var e = 0u; e < push.sample_count; e++) {
-        let sample = penumbra_queue_samples[base + e];
-        if sample.x > 0.0 {
-            let light = &penumbra_lights[bitcast<u32>(sample.y)];
-            let l = LightSample(penumbra_queue_rays[base + e].xyz, sample.x * (*light).intensity, (*light).diffuse, (*light).specular);
+        let q = (base + e) * penumbra_QUEUE_TEXELS;
+        let sample = textureLoad(penumbra_queue, penumbra_texel(q + 1u));
+        let falloff = bitcast<f32>(sample.x);
+        if falloff > 0.0 {
+            let diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * sample.y));
+            let specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * sample.y + 1u));
+            let to_light = penumbra_f3(textureLoad(penumbra_queue, penumbra_texel(q)));
+            let l = LightSample(to_light, falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
             colour += shade(s, l, p);
         }
     }

@@ -8,6 +8,8 @@
 // still valid. Adjacent pixels trace the same light sample together, so the
 // rays of a SIMD group are coherent.
 
+@group(0) @binding(15) var queue: texture_storage_2d<rgba32uint, write>;
+
 @compute @workgroup_size(8, 8, 1)
 fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Before any branch (see first_light).
@@ -19,17 +21,17 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     var traced = 0u;
     if in_image(px) {
         let slot = tile_slot(px);
-        // Only the members this stage needs (stages/resolve.wgsl says why).
-        let kind = hit_records[slot].kind;
+        let t0 = textureLoad(hit_records, record_texel(slot, 0u));
         var start: Hit;
-        start.found = kind != KIND_NONE;
-        start.kind = kind;
+        start.found = t0.w != KIND_NONE;
+        start.kind = t0.w;
         var shading_normal = vec3<f32>(0.0);
         if start.found {
-            start.index = hit_records[slot].index;
-            start.position = hit_records[slot].position;
-            start.geometric_normal = hit_records[slot].geometric_normal;
-            shading_normal = hit_records[slot].shading_normal;
+            let t1 = textureLoad(hit_records, record_texel(slot, 1u));
+            start.position = bitcast<vec3<f32>>(t0.xyz);
+            start.geometric_normal = bitcast<vec3<f32>>(t1.xyz);
+            start.index = t1.w;
+            shading_normal = bitcast<vec3<f32>>(textureLoad(hit_records, record_texel(slot, 2u)).xyz);
         }
         let pixel = px.y * push.size.x + px.x;
         let base = slot * push.sample_count;
@@ -64,8 +66,9 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
                             }
                         }
                     }
-                    queue_rays[base + k - first] = ray;
-                    queue_samples[base + k - first] = vec2<f32>(falloff, bitcast<f32>(i));
+                    let entry = base + k - first;
+                    textureStore(queue, queue_texel(entry, 0u), bitcast<vec4<u32>>(ray));
+                    textureStore(queue, queue_texel(entry, 1u), vec4<u32>(bitcast<u32>(falloff), i, 0u, 0u));
                 }
                 k++;
             }

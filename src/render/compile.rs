@@ -172,7 +172,19 @@ impl Assembled {
                                 access,
                             },
                     },
-                ) if !access.contains(naga::StorageAccess::STORE) => Some(B::TexelImage),
+                ) => Some(match access.contains(naga::StorageAccess::STORE) {
+                    false => B::TexelImage,
+                    // Written (and only written: read-write images need a
+                    // device feature), as the stages write theirs.
+                    true if !access.contains(naga::StorageAccess::LOAD) => B::StageImage,
+                    true => {
+                        return self.binding_error(
+                            module,
+                            handle,
+                            "a read-write texel image; declare it `read` or `write`",
+                        )
+                    }
+                }),
                 _ => None,
             };
             let info = if rb.group == 0 {
@@ -181,9 +193,11 @@ impl Assembled {
                 None
             };
             let expected = info.map(|i| i.ty);
-            // A stage may only read a buffer others write (same descriptor).
+            // A stage may only read a buffer or image others write (same
+            // descriptor).
             let fits = match (declared, expected) {
                 (Some(B::StorageReadOnly), Some(B::StorageReadWrite)) => true,
+                (Some(B::TexelImage), Some(B::StageImage)) => true,
                 (d, e) => d.is_some() && d == e,
             };
             let name = var.name.as_deref().unwrap_or("?");
@@ -191,7 +205,10 @@ impl Assembled {
                 // The variable's name says what it holds: the table's name,
                 // or the shade stage's prefixed one.
                 let want = info.map_or("", |i| i.name);
-                if name == want || name.strip_prefix("penumbra_") == Some(want) {
+                // (`<name>_out`: the stage that writes a stage image.)
+                let out =
+                    name.strip_suffix("_out") == Some(want) && declared == Some(B::StageImage);
+                if name == want || out || name.strip_prefix("penumbra_") == Some(want) {
                     continue;
                 }
                 let span = module.global_variables.get_span(handle);
@@ -208,6 +225,9 @@ impl Assembled {
                 Some(B::StorageReadOnly) => "a read-only storage buffer (var<storage, read>)",
                 Some(B::StorageReadWrite) => "a storage buffer (var<storage, read_write>)",
                 Some(B::TexelImage) => "a texel image (texture_storage_2d<rgba32uint, read>)",
+                Some(B::StageImage) => {
+                    "a stage's texel image (texture_storage_2d<rgba32uint, write>, or read)"
+                }
                 None => "nothing",
             };
             let what = if declared.is_some() {
@@ -225,6 +245,24 @@ impl Assembled {
             return Err(self.error_at(span.location(&self.text).into(), message));
         }
         Ok(())
+    }
+
+    /// An error at the declaration of binding `handle`.
+    fn binding_error(
+        &self,
+        module: &naga::Module,
+        handle: naga::Handle<naga::GlobalVariable>,
+        what: &str,
+    ) -> Result<(), CompileError> {
+        let name = module.global_variables[handle]
+            .name
+            .as_deref()
+            .unwrap_or("?");
+        let span = module.global_variables.get_span(handle);
+        Err(self.error_at(
+            span.location(&self.text).into(),
+            format!("`{name}` is declared as {what}"),
+        ))
     }
 
     /// Parses the WGSL (no validation): for layout checks and tools.
@@ -692,11 +730,11 @@ mod tests {
                 ],
             ),
             (
-                &[("@binding(3) var triangles", "@binding(19) var triangles")],
+                &[("@binding(3) var triangles", "@binding(20) var triangles")],
                 [
                     "triangle.wgsl:",
                     "`triangles`",
-                    "@binding(19)",
+                    "@binding(20)",
                     "texel image",
                     "binds nothing",
                 ],

@@ -156,27 +156,6 @@ pub struct ShaderNode {
     pub _pad1: u32,
 }
 
-/// Mirrors `HitRecord` in `shaders/stages/records.wgsl` (and
-/// `penumbra_HitRecord` in `shaders/stages/shade.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct HitRecord {
-    pub position: [f32; 3],
-    pub t: f32,
-    pub geometric_normal: [f32; 3],
-    pub kind: u32,
-    pub shading_normal: [f32; 3],
-    pub index: u32,
-    pub to_eye: [f32; 3],
-    pub object: u32,
-    pub uv: [f32; 2],
-    pub bary: [f32; 2],
-    pub shader: u32,
-    pub program: u32,
-    pub params: u32,
-    pub _pad: u32,
-}
-
 /// Mirrors `BvhNode` in `shaders/bvh.wgsl`: an interior node's two
 /// children, their boxes quantised in the node's frame (see
 /// [`super::quantised_bvh`]); 32 bytes, two texels.
@@ -590,26 +569,6 @@ mod tests {
                     _pad0
                 ]
             ),
-            layout!(
-                "HitRecord",
-                HitRecord,
-                [
-                    position,
-                    t,
-                    geometric_normal,
-                    kind,
-                    shading_normal,
-                    index,
-                    to_eye,
-                    object,
-                    uv,
-                    bary,
-                    shader,
-                    program,
-                    params,
-                    _pad
-                ]
-            ),
             layout!("Plane", Plane, [point, shader, normal, object]),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
             layout!("Triangle", Triangle, [v0, shader, v1, object, v2, normals]),
@@ -697,7 +656,7 @@ mod tests {
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let layouts = host_layouts();
-        for name in ["HitRecord", "Light", "PushConstants"] {
+        for name in ["PushConstants"] {
             let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
             let prefixed = format!("penumbra_{name}");
             let (_, ty) = module
@@ -714,6 +673,45 @@ mod tests {
                 .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
                 .collect();
             assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
+        }
+    }
+
+    /// The shade stage's copies of engine constants equal the engine's.
+    #[test]
+    fn shade_stage_constants_match_the_engine() {
+        use crate::render::shade::{assemble, read_program, ProgramFile};
+        use crate::render::ShaderSource;
+        let file = ProgramFile::Builtin("shading/phong.wgsl");
+        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+        let shade = assemble(&ShaderSource::Embedded, &file, &text)
+            .unwrap()
+            .assembled
+            .parse()
+            .unwrap();
+        let engine = ShaderSource::Embedded.assemble().unwrap().parse().unwrap();
+        let value = |m: &naga::Module, name: &str| {
+            let (_, c) = m
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("const {name} not found"));
+            match m.global_expressions[c.init] {
+                naga::Expression::Literal(naga::Literal::U32(v)) => v,
+                _ => panic!("{name} is not a u32 literal"),
+            }
+        };
+        for name in [
+            "FLAG_WARM_UP",
+            "KIND_NONE",
+            "RECORD_TEXELS",
+            "QUEUE_TEXELS",
+            "TEXEL_ROW_SHIFT",
+        ] {
+            assert_eq!(
+                value(&shade, &format!("penumbra_{name}")),
+                value(&engine, name),
+                "{name}"
+            );
         }
     }
 
@@ -742,6 +740,8 @@ mod tests {
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
             ("TEXEL_ROW", crate::vulkan::TEXEL_ROW),
+            ("RECORD_TEXELS", super::super::tiles::RECORD_TEXELS as u32),
+            ("QUEUE_TEXELS", super::super::tiles::QUEUE_TEXELS as u32),
             ("TEXEL_ROW_SHIFT", crate::vulkan::TEXEL_ROW.trailing_zeros()),
             (
                 "BVH_RECORD_TEXELS",

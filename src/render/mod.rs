@@ -374,9 +374,9 @@ struct HitKey {
 /// The stage buffers of one tile plan, and whose hits they hold.
 struct StageBuffers {
     plan: TilePlan,
-    hits: Buffer,
-    queue_rays: Buffer,
-    queue_samples: Buffer,
+    hits: TexelImage,
+    queue: TexelImage,
+    resolved: TexelImage,
     radiance: Buffer,
     holds: Option<HitKey>,
 }
@@ -539,7 +539,7 @@ impl Renderer {
                     BindingType::Uniform => {
                         Bound::Buffer(ctx.create_buffer("warm-up", BufferUsage::Uniform, 256)?)
                     }
-                    BindingType::TexelImage => {
+                    BindingType::TexelImage | BindingType::StageImage => {
                         Bound::Image(ctx.create_texel_image("warm-up", &[])?)
                     }
                     _ => Bound::Buffer(ctx.create_buffer("warm-up", BufferUsage::Storage, 256)?),
@@ -682,14 +682,17 @@ impl Renderer {
         let ctx = &self.context;
         let px = plan.pixels();
         let entries = px * plan.chunk as u64;
-        let storage =
-            |label: &str, bytes: u64| ctx.create_buffer(label, BufferUsage::Storage, bytes.max(16));
+        let image = |label: &str, texels: u64| ctx.create_stage_image(label, texels);
         self.stage_buffers.push(StageBuffers {
             plan,
-            hits: storage("hit records", px * tiles::HIT_RECORD_BYTES)?,
-            queue_rays: storage("queued rays", entries * 16)?,
-            queue_samples: storage("queued samples", entries * 8)?,
-            radiance: storage("colour sums", px * tiles::RADIANCE_BYTES)?,
+            hits: image("hit records", px * tiles::RECORD_TEXELS)?,
+            queue: image("queued samples", entries * tiles::QUEUE_TEXELS)?,
+            resolved: image("resolved materials", px)?,
+            radiance: ctx.create_buffer(
+                "colour sums",
+                BufferUsage::Storage,
+                px * tiles::RADIANCE_BYTES,
+            )?,
             holds: None,
         });
         Ok(self.stage_buffers.len() - 1)
@@ -813,11 +816,15 @@ impl Renderer {
             // AOV buffer: a placeholder, replaced when AOVs are asked for.
             b(ctx.create_buffer("AOVs", BufferUsage::Storage, 16)?),
             // The tile's stage buffers: placeholders, replaced per render.
-            b(ctx.create_buffer("hit records", BufferUsage::Storage, 16)?),
-            b(ctx.create_buffer("queued rays", BufferUsage::Storage, 16)?),
-            b(ctx.create_buffer("queued samples", BufferUsage::Storage, 16)?),
+            texels("hit records", &[])?,
+            texels("queued samples", &[])?,
+            texels("resolved materials", &[])?,
             b(ctx.create_buffer("colour sums", BufferUsage::Storage, 16)?),
-            b(params_buffer(ctx, &materials)?),
+            texels("shader parameters", bytemuck::cast_slice(&materials.words))?,
+            texels(
+                "light colours",
+                bytemuck::cast_slice(&light_colours(lights)),
+            )?,
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds
@@ -1069,8 +1076,8 @@ impl Renderer {
             refs[Binding::Image as usize] = b.into();
         }
         refs[Binding::HitRecords as usize] = (&buffers.hits).into();
-        refs[Binding::QueueRays as usize] = (&buffers.queue_rays).into();
-        refs[Binding::QueueSamples as usize] = (&buffers.queue_samples).into();
+        refs[Binding::Queue as usize] = (&buffers.queue).into();
+        refs[Binding::Resolved as usize] = (&buffers.resolved).into();
         refs[Binding::Radiance as usize] = (&buffers.radiance).into();
         let stage = |s: Stage| &self.stage_pipelines[&(s, stage_kernel)].pipeline;
         let programs: Vec<&ComputePipeline> = scene
@@ -1313,13 +1320,18 @@ fn set_leaves(nodes: &mut [layout::ShaderNode], materials: &Materials) {
     }
 }
 
-/// The parameter words' buffer (never empty: a binding needs a buffer).
-fn params_buffer(ctx: &Context, materials: &Materials) -> Result<Buffer, VulkanError> {
-    let mut words = materials.words.clone();
-    words.resize(words.len().max(4), 0);
-    ctx.create_buffer_with_data(
-        "shader parameters",
-        BufferUsage::Storage,
-        bytemuck::cast_slice(&words),
-    )
+/// Each light's colours for the shade stage, three texels a light:
+/// (diffuse, intensity), (specular, 0), (ambient, 0), as bits.
+fn light_colours(lights: &[layout::Light]) -> Vec<[u32; 4]> {
+    let bits = |c: [f32; 3], w: f32| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), w.to_bits()];
+    lights
+        .iter()
+        .flat_map(|l| {
+            [
+                bits(l.diffuse, l.intensity),
+                bits(l.specular, 0.0),
+                bits(l.ambient, 0.0),
+            ]
+        })
+        .collect()
 }

@@ -144,9 +144,19 @@ fn file_error(e: ShaderFileError) -> CompileError {
 /// file's `ambient` over the lights.
 fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> String {
     let mut out = String::new();
-    let mut at = 0u32;
+    // `at` is the first texel of the material's words (4-word aligned), so
+    // each word's texel and component are known here.
+    let words: usize = fields.iter().map(|f| f.ty.words()).sum();
+    let mut body = String::new();
+    for t in 0..words.div_ceil(4) {
+        let _ = writeln!(
+            body,
+            "    let t{t} = textureLoad(penumbra_params, penumbra_texel(at + {t}u));"
+        );
+    }
+    let word = |i: usize| format!("t{}.{}", i / 4, ["x", "y", "z", "w"][i % 4]);
+    let mut at = 0usize;
     let mut args = Vec::new();
-    let word = |i: u32| format!("penumbra_params[at + {i}u]");
     for field in fields {
         let kind = &field.ty;
         args.push(match kind {
@@ -154,25 +164,25 @@ fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> Str
             ParamType::I32 => format!("bitcast<i32>({})", word(at)),
             ParamType::U32 => word(at),
             vec => {
-                let n = vec.words() as u32;
+                let n = vec.words();
                 let parts: Vec<String> = (0..n)
                     .map(|i| format!("bitcast<f32>({})", word(at + i)))
                     .collect();
                 format!("vec{n}<f32>({})", parts.join(", "))
             }
         });
-        at += kind.words() as u32;
+        at += kind.words();
     }
     if placeholder {
         args.push("0u".into());
     }
     let _ = writeln!(
         out,
-        "fn penumbra_load_params(at: u32) -> Params {{\n    return Params({});\n}}",
+        "fn penumbra_load_params(at: u32) -> Params {{\n{body}    return Params({});\n}}",
         args.join(", ")
     );
     let sum = if has_ambient {
-        "    var sum = vec3<f32>(0.0);\n    for (var i = 0u; i < penumbra_push.light_count; i++) {\n        sum += ambient(s, penumbra_lights[i].ambient, p);\n    }\n    return sum;"
+        "    var sum = vec3<f32>(0.0);\n    for (var i = 0u; i < penumbra_push.light_count; i++) {\n        sum += ambient(s, penumbra_f3(textureLoad(penumbra_light_colours, penumbra_texel(3u * i + 2u))), p);\n    }\n    return sum;"
     } else {
         "    return vec3<f32>(0.0);"
     };
@@ -229,9 +239,9 @@ pub struct Program {
 pub struct Materials {
     /// One per distinct shader file, in order of first use.
     pub programs: Vec<Program>,
-    /// Every leaf's parameter words, one after the other.
+    /// Every leaf's parameter words, each leaf's starting a 4-word texel.
     pub words: Vec<u32>,
-    /// Per scene shader: (program, first parameter word) of a leaf, `None`
+    /// Per scene shader: (program, first parameter texel) of a leaf, `None`
     /// for a checker.
     pub leaves: Vec<Option<(u32, u32)>>,
 }
@@ -292,8 +302,11 @@ impl Materials {
                 }
                 Shader::Checker(_) => Vec::new(),
             };
-            m.leaves.push(Some((program as u32, m.words.len() as u32)));
-            m.words.extend(words);
+            // Each leaf's words start a texel (stages/shade.wgsl).
+            m.leaves
+                .push(Some((program as u32, (m.words.len() / 4) as u32)));
+            m.words.extend(&words);
+            m.words.resize(m.words.len().next_multiple_of(4), 0);
         }
         Ok(m)
     }
@@ -362,7 +375,7 @@ mod tests {
             .next()
             .unwrap();
         assert!(
-            loader.contains("vec4<f32>(bitcast<f32>(penumbra_params[at + 5u])"),
+            loader.contains("vec4<f32>(bitcast<f32>(t1.y), bitcast<f32>(t1.z), bitcast<f32>(t1.w), bitcast<f32>(t2.x))"),
             "{loader}"
         );
         s.assembled

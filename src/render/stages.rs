@@ -67,12 +67,12 @@ const BASE: &[&str] = &[
     "render.wgsl",
     "camera.wgsl",
     "ray.wgsl",
+    "texels.wgsl",
     "stages/records.wgsl",
 ];
 
 /// Files of closest-hit and any-hit traversal (the BVH walks both).
 const TRAVERSAL: &[&str] = &[
-    "texels.wgsl",
     "hit.wgsl",
     "primitives/plane.wgsl",
     "primitives/sphere.wgsl",
@@ -127,14 +127,14 @@ impl Stage {
     /// The files the stage is compiled from, in order.
     pub fn files(self) -> Vec<&'static str> {
         let own: &[&str] = match self {
-            Stage::Hit => &["sampling.wgsl", "stages/hit.wgsl"],
+            Stage::Hit => &["sampling.wgsl", "aov.wgsl", "stages/hit.wgsl"],
             Stage::Resolve => &[
                 "shading/shader.wgsl",
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
             ],
             Stage::Shadow => &["lights.wgsl", "sampling.wgsl", "stages/shadow.wgsl"],
-            Stage::Gather => &["aov.wgsl", "stages/gather.wgsl"],
+            Stage::Gather => &["stages/gather.wgsl"],
             Stage::Trace => &["queries.wgsl"],
         };
         let traversal = matches!(self, Stage::Hit | Stage::Shadow | Stage::Trace);
@@ -199,16 +199,18 @@ pub enum Binding {
     QueryHits,
     /// Arbitrary output variables.
     Aovs,
-    /// The tile's hit records.
+    /// The tile's hit records (texels: `shaders/stages/records.wgsl`).
     HitRecords,
-    /// The tile's queued shadow rays.
-    QueueRays,
-    /// Each queued light sample's falloff (0: nothing to add) and light.
-    QueueSamples,
+    /// The tile's queued light samples (texels).
+    Queue,
+    /// Material resolve's result per record (texels).
+    Resolved,
     /// The tile's per-pixel colour sums.
     Radiance,
-    /// Every leaf shader's parameter words.
+    /// Every leaf shader's parameter words (texels).
     Params,
+    /// Each light's colours and intensity for the shade stage (texels).
+    LightColours,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -227,7 +229,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 19] = {
+pub const BINDINGS: [BindingInfo; 20] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -244,11 +246,12 @@ pub const BINDINGS: [BindingInfo; 19] = {
         b(Binding::QueryRays, "query_rays", StorageReadOnly),
         b(Binding::QueryHits, "query_hits", StorageReadWrite),
         b(Binding::Aovs, "aovs", StorageReadWrite),
-        b(Binding::HitRecords, "hit_records", StorageReadWrite),
-        b(Binding::QueueRays, "queue_rays", StorageReadWrite),
-        b(Binding::QueueSamples, "queue_samples", StorageReadWrite),
+        b(Binding::HitRecords, "hit_records", StageImage),
+        b(Binding::Queue, "queue", StageImage),
+        b(Binding::Resolved, "resolved", StageImage),
         b(Binding::Radiance, "radiance", StorageReadWrite),
-        b(Binding::Params, "params", StorageReadOnly),
+        b(Binding::Params, "params", TexelImage),
+        b(Binding::LightColours, "light_colours", TexelImage),
     ]
 };
 

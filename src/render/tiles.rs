@@ -7,13 +7,18 @@
 //! when a pixel has more light samples than a chunk holds, the light,
 //! shadow and shade stages run once per chunk of samples.
 
-/// Bytes of one hit record (`layout::HitRecord`).
-pub const HIT_RECORD_BYTES: u64 = 96;
+/// Texels of one hit record (`RECORD_TEXELS` in
+/// `shaders/stages/records.wgsl`).
+pub const RECORD_TEXELS: u64 = 5;
+/// Texels of one queued light sample (`QUEUE_TEXELS`).
+pub const QUEUE_TEXELS: u64 = 2;
+/// Bytes of one pixel's hit record and resolved material.
+pub const HIT_RECORD_BYTES: u64 = (RECORD_TEXELS + 1) * 16;
 /// Bytes of one pixel's colour sum.
 pub const RADIANCE_BYTES: u64 = 16;
 /// Bytes of one queued light sample: direction and distance, falloff and
 /// light.
-pub const QUEUE_ENTRY_BYTES: u64 = 24;
+pub const QUEUE_ENTRY_BYTES: u64 = QUEUE_TEXELS * 16;
 /// Most light samples per pixel one chunk holds.
 pub const MAX_CHUNK: u32 = 64;
 /// The default bound on a tile's stage memory: 128 MiB.

@@ -255,7 +255,7 @@ impl Context {
                     BindingType::StorageReadOnly | BindingType::StorageReadWrite,
                     Resource::Buffer(b),
                 ) => b.usage() == Some(BufferUsage::Storage),
-                (BindingType::TexelImage, Resource::Image(_)) => true,
+                (BindingType::TexelImage | BindingType::StageImage, Resource::Image(_)) => true,
                 _ => false,
             };
             if !matches {

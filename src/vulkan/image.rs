@@ -92,7 +92,21 @@ impl Context {
                 data.len()
             )));
         }
-        let texels = (data.len() / TEXEL_BYTES) as u64;
+        self.texel_image((data.len() / TEXEL_BYTES) as u64, label, Some(data))
+    }
+
+    /// A texel image of at least `texels` texels whose contents are undefined until a pipeline
+    /// writes them (the stages' hit records and queues): no upload, so large ones are cheap.
+    pub fn create_stage_image(&self, label: &str, texels: u64) -> Result<TexelImage, VulkanError> {
+        self.texel_image(texels, label, None)
+    }
+
+    fn texel_image(
+        &self,
+        texels: u64,
+        label: &str,
+        data: Option<&[u8]>,
+    ) -> Result<TexelImage, VulkanError> {
         let height = checked_rows(label, texels, self.limits().max_image_dimension_2d)?;
         let needed = vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::TRANSFER_DST;
         if !self.texel_format_features.contains(needed) {
@@ -160,6 +174,31 @@ impl Context {
         result.view = unsafe { device.create_image_view(&view_info, None) }
             .map_err(vk_err("vkCreateImageView"))?;
 
+        let range_all = range;
+        let Some(data) = data else {
+            // No contents: only the layout the shaders use.
+            let to_shader = vk::ImageMemoryBarrier::default()
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::GENERAL)
+                .dst_access_mask(vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(range_all);
+            // SAFETY: the image is valid and idle.
+            self.submit(|device, cmd| unsafe {
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_shader],
+                );
+            })?;
+            return Ok(result);
+        };
         // Images in optimal tiling cannot be mapped: upload through a staging buffer.
         let staging = self.upload_buffer(label, bytes, data)?;
         let to_transfer = vk::ImageMemoryBarrier::default()

@@ -18,6 +18,9 @@ pub enum BindingType {
     Uniform,
     /// `texture_storage_2d<rgba32uint, read>`: a [`super::TexelImage`].
     TexelImage,
+    /// A [`super::TexelImage`] that some pipelines write
+    /// (`texture_storage_2d<rgba32uint, write>`) and others read.
+    StageImage,
 }
 
 impl BindingType {
@@ -27,7 +30,7 @@ impl BindingType {
                 vk::DescriptorType::STORAGE_BUFFER
             }
             BindingType::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
-            BindingType::TexelImage => vk::DescriptorType::STORAGE_IMAGE,
+            BindingType::TexelImage | BindingType::StageImage => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
 }
