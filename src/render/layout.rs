@@ -656,24 +656,23 @@ mod tests {
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let layouts = host_layouts();
-        for name in ["PushConstants"] {
-            let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
-            let prefixed = format!("penumbra_{name}");
-            let (_, ty) = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref() == Some(prefixed.as_str()))
-                .unwrap_or_else(|| panic!("{prefixed} not in shade.wgsl"));
-            let naga::TypeInner::Struct { members, span } = &ty.inner else {
-                panic!("{prefixed} is not a struct");
-            };
-            assert_eq!(*span as usize, *size, "{prefixed}: size");
-            let wgsl: Vec<(&str, usize)> = members
-                .iter()
-                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
-                .collect();
-            assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
-        }
+        let name = "PushConstants";
+        let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
+        let prefixed = format!("penumbra_{name}");
+        let (_, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(prefixed.as_str()))
+            .unwrap_or_else(|| panic!("{prefixed} not in shade.wgsl"));
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{prefixed} is not a struct");
+        };
+        assert_eq!(*span as usize, *size, "{prefixed}: size");
+        let wgsl: Vec<(&str, usize)> = members
+            .iter()
+            .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
+            .collect();
+        assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
     }
 
     /// The shade stage's copies of engine constants equal the engine's.
