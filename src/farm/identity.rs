@@ -39,8 +39,9 @@ pub struct IdentityError {
 
 /// The identity of a render as 64 hex digits: SHA-256 over the files'
 /// contents (in the loader's order, each with its length; not their paths,
-/// so that nodes that mount the same files elsewhere agree), the assembled
-/// WGSL, the settings and penumbra's version.
+/// so that nodes that mount the same files elsewhere agree), every shader
+/// file of [`crate::render::stages::SHADER_FILES`] (engine stages, shade
+/// stage, built-in shading files), the settings and penumbra's version.
 pub fn render_id(
     files: &[PathBuf],
     shaders: &ShaderSource,
@@ -57,12 +58,59 @@ pub fn render_id(
         h.update((bytes.len() as u64).to_le_bytes());
         h.update(&bytes);
     }
-    let wgsl = shaders.assemble().map_err(|e| IdentityError {
-        path: e.location.clone(),
-        error: e.message.clone(),
-    })?;
-    h.update((wgsl.text.len() as u64).to_le_bytes());
-    h.update(wgsl.text.as_bytes());
+    // Every shader file: the engine stages', the shade stage's and the
+    // built-in shading files (a user's are among `files`).
+    for (name, _) in crate::render::stages::SHADER_FILES {
+        let (_, text) = shaders.read(name).map_err(|e| IdentityError {
+            path: e.location.clone(),
+            error: e.message.clone(),
+        })?;
+        h.update((text.len() as u64).to_le_bytes());
+        h.update(text.as_bytes());
+    }
     h.update(format!("{settings:?}").as_bytes());
     Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An edit of any shader file, the built-in shading files included,
+    /// gives another identity (parts rendered before and after must not
+    /// merge).
+    #[test]
+    fn every_shader_file_is_part_of_the_identity() {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, text) in crate::render::stages::SHADER_FILES {
+            let path = dir.path().join(name);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, text).unwrap();
+        }
+        let shaders = ShaderSource::Directory(dir.path().to_path_buf());
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            spp: 1,
+            seed: 0,
+            area_samples: None,
+            kernel: KernelOptions::default(),
+        };
+        let before = render_id(&[], &shaders, &settings).unwrap();
+        assert_eq!(
+            before,
+            render_id(&[], &ShaderSource::Embedded, &settings).unwrap()
+        );
+        for name in ["shading/phong.wgsl", "stages/shade.wgsl", "bvh.wgsl"] {
+            let path = dir.path().join(name);
+            let text = std::fs::read_to_string(&path).unwrap();
+            std::fs::write(&path, format!("{text}\n// edited\n")).unwrap();
+            assert_ne!(
+                render_id(&[], &shaders, &settings).unwrap(),
+                before,
+                "{name}"
+            );
+            std::fs::write(&path, text).unwrap();
+        }
+    }
 }
