@@ -41,7 +41,7 @@ struct Light {
 
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 
-// lights[0], read by the light stage's first statement. lavapipe loads data at a
+// lights[0], read by the shadow stage's first statement. lavapipe loads data at a
 // uniform address once per SIMD group only outside all branches and loops;
 // inside them every lane loads for itself, and the light loop is inside
 // both (0.95x the bunny frame: docs/bench.md §6). The host always uploads at

@@ -29,7 +29,7 @@ fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 // Whether anything blocks the light in unit direction `to_light` at
 // distance `t_max` from the hit point.
 fn occluded(hit: Hit, to_light: vec3<f32>, t_max: f32) -> bool {
-    // (The light stage queues only lights above the geometric surface.)
+    // (The shadow stage traces only samples above the geometric surface.)
     // Only triangles need the offset (their neighbours): planes and spheres
     // never intersect themselves here, and an offset of many ulps of the
     // camera-relative position would shift their shadows, and let light leak

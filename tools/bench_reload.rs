@@ -496,7 +496,7 @@ fn main() -> anyhow::Result<()> {
          (`~/.cache/mesa_shader_cache*`) cannot hide the driver compile, as it would for a \
          pipeline it has seen. Times from the start of the save (`write`) to the image renamed \
          into place; the split comes from the loop's own report. The renderer runs in stages \
-         (hit, resolve, lights, shadow, one shade pipeline per shader file, gather: \
+         (hit, resolve, shadow with light sampling, one shade pipeline per shader file, gather: \
          `src/render/stages.rs`), so a shading edit recompiles only its file's shade pipeline \
          and the render after it reruns only shade and gather on the hit records it kept.\n\n\
          ## Phong edit → preview on disk (10 edits of `shaders/shading/phong.wgsl`)\n\n\

@@ -13,7 +13,9 @@
 use std::time::Duration;
 
 use penumbra::loaders::{self, LoadOptions};
+use penumbra::render::tiles::{TilePlan, DEFAULT_STAGE_MEMORY};
 use penumbra::render::{Renderer, RendererOptions};
+use penumbra::scene::LightKind;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -33,6 +35,29 @@ fn main() -> anyhow::Result<()> {
         load.height = Some(h.parse()?);
     }
     let scene = loaders::load_scene(std::path::Path::new(&path), &load)?.scene;
+    // The stage memory of the scene's light samples at 1024² and 4096²:
+    // untiled, and tiled within the default bound.
+    let samples: u32 = scene
+        .lights
+        .iter()
+        .map(|l| match l.kind {
+            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => samples,
+            _ => 1,
+        })
+        .sum();
+    let mib = |b: u64| b as f64 / 1048576.0;
+    for side in [1024u32, 4096] {
+        let untiled = TilePlan::new([side, side], samples, u64::MAX / 2, u64::MAX / 2);
+        let plan = TilePlan::new([side, side], samples, DEFAULT_STAGE_MEMORY, 128 << 20);
+        println!(
+            "{side}x{side}, {samples} light samples per pixel: {:.0} MiB of hit records and queue untiled; {} tiles of {:.1} MiB within the {:.0} MiB bound ({} sample chunks)",
+            mib(untiled.bytes()),
+            plan.tiles(side, 0..side).len(),
+            mib(plan.bytes()),
+            mib(DEFAULT_STAGE_MEMORY),
+            plan.chunks().len()
+        );
+    }
     let mut r = Renderer::new(&RendererOptions::default())?;
     r.set_profile_stages(true);
     let up = r.upload(&scene)?;
