@@ -30,6 +30,7 @@ pub mod brdf;
 pub mod bvh;
 pub mod error;
 pub mod farm;
+pub mod frame;
 pub mod loaders;
 pub mod metrics;
 pub mod output;

@@ -31,8 +31,8 @@
 
 use std::path::Path;
 
+use crate::frame::Image;
 use crate::output::srgb8;
-use crate::render::Image;
 
 /// Why two images could not be compared.
 #[derive(Debug, thiserror::Error)]

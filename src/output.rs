@@ -6,7 +6,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::render::Image;
+use crate::frame::Image;
 
 /// The image formats we write, chosen by the file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -20,7 +20,7 @@ use exr::prelude::*;
 use std::result::Result;
 
 use super::split::{Passes, Tile};
-use crate::render::Image;
+use crate::frame::Image;
 
 /// What a part file says about itself (its header; no pixels).
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::hit::Kind;
 use super::{hit, sampling, World};
-use crate::render::{Aovs, Sampling};
+use crate::frame::{Aovs, Sampling};
 use crate::scene::{Scene, Shape};
 
 /// The AOVs of `scene` as `render` would see them in pass 0.

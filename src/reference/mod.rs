@@ -52,9 +52,8 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::render::{
-    Frame, Image, KernelOptions, RenderStats, Sampler, Sampling, Timings, MAX_SPP,
-};
+use crate::frame::{Frame, Image, RenderStats, Sampling, Timings, MAX_SPP};
+use crate::render::{KernelOptions, Sampler};
 use crate::scene::{Scene, Shader, Shape};
 
 /// A plane: a point on it and its unit normal.
