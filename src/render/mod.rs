@@ -188,6 +188,52 @@ impl UploadedScene {
     }
 }
 
+/// One render of an uploaded scene ([`Renderer::render_request`]): size,
+/// samples, which part, which outputs, and the caller's hooks.
+pub struct RenderRequest<'a> {
+    /// Image width, pixels (at most the uploaded size; smaller keeps the
+    /// field of view: previews).
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Samples per pixel, seed and time budget.
+    pub sampling: Sampling,
+    /// Only these rows and passes of the full-size render (then width and
+    /// height must be the uploaded size, and the image is the passes' sum).
+    pub part: Option<PartRange>,
+    /// Also return the AOVs of each pixel's first primary ray.
+    pub aovs: bool,
+    /// Called after every pass.
+    pub on_pass: Option<&'a mut dyn FnMut(&PassInfo)>,
+    /// Asked between bands of rows; a yes stops the render (`Ok(None)`).
+    pub cancel: Option<&'a mut dyn FnMut() -> bool>,
+}
+
+impl RenderRequest<'_> {
+    /// One sample per pixel through its centre at `width`×`height`, the
+    /// whole image, no AOVs, no hooks.
+    pub fn new(width: u32, height: u32) -> Self {
+        RenderRequest {
+            width,
+            height,
+            sampling: Sampling::default(),
+            part: None,
+            aovs: false,
+            on_pass: None,
+            cancel: None,
+        }
+    }
+}
+
+/// What [`Renderer::render_request`] returns.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image and its statistics.
+    pub frame: Frame,
+    /// The AOVs, when asked for.
+    pub aovs: Option<Aovs>,
+}
+
 /// A compiled pipeline and the hash of the source it was compiled from
 /// (for a shade pipeline also of the shader file's own text).
 struct Cached {
@@ -714,15 +760,16 @@ impl Renderer {
 
     /// Renders an uploaded scene at `width`×`height` pixels (at most the
     /// scene's size; smaller sizes keep the field of view: previews), one
-    /// sample per pixel through its centre. Compiles the kernel first if the
-    /// cache does not have it.
+    /// sample per pixel through its centre: [`Renderer::render_request`] of
+    /// [`RenderRequest::new`].
     pub fn render_uploaded(
         &mut self,
         scene: &UploadedScene,
         width: u32,
         height: u32,
     ) -> Result<Frame, RenderError> {
-        self.render_progressive(scene, width, height, &Sampling::default(), &mut |_| {})
+        self.render_whole(scene, RenderRequest::new(width, height))
+            .map(|r| r.frame)
     }
 
     /// Renders an uploaded scene in passes of one sample per pixel each,
@@ -737,9 +784,12 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
-        let done =
-            self.render_passes(scene, width, height, sampling, on_pass, false, None, None)?;
-        Ok(done.unwrap_or_else(|| unreachable!("not cancellable")).0)
+        let request = RenderRequest {
+            sampling: *sampling,
+            on_pass: Some(on_pass),
+            ..RenderRequest::new(width, height)
+        };
+        self.render_whole(scene, request).map(|r| r.frame)
     }
 
     /// Renders one part of a full-size render: the rows and passes of
@@ -756,24 +806,13 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<Frame, RenderError> {
-        let (w, h) = (scene.width, scene.height);
-        if part.rows.start >= part.rows.end || part.rows.end > h {
-            return Err(RenderError::Scene {
-                field: "--tile".into(),
-                message: format!("rows {:?} are not within the image's {h} rows", part.rows),
-            });
-        }
-        if part.passes.start >= part.passes.end || part.passes.end > sampling.spp {
-            return Err(RenderError::Scene {
-                field: "--passes".into(),
-                message: format!(
-                    "passes {}..{} are not within 0..{}",
-                    part.passes.start, part.passes.end, sampling.spp
-                ),
-            });
-        }
-        let done = self.render_passes(scene, w, h, sampling, on_pass, false, None, Some(part))?;
-        Ok(done.unwrap_or_else(|| unreachable!("not cancellable")).0)
+        let request = RenderRequest {
+            sampling: *sampling,
+            part: Some(part.clone()),
+            on_pass: Some(on_pass),
+            ..RenderRequest::new(scene.width, scene.height)
+        };
+        self.render_whole(scene, request).map(|r| r.frame)
     }
 
     /// [`Renderer::render_progressive`] that also returns the arbitrary
@@ -786,28 +825,73 @@ impl Renderer {
         sampling: &Sampling,
         on_pass: &mut dyn FnMut(&PassInfo),
     ) -> Result<(Frame, Aovs), RenderError> {
-        let done = self.render_passes(scene, width, height, sampling, on_pass, true, None, None)?;
-        let (frame, aovs) = done.unwrap_or_else(|| unreachable!("not cancellable"));
-        Ok((frame, aovs.unwrap_or_default()))
+        let request = RenderRequest {
+            sampling: *sampling,
+            aovs: true,
+            on_pass: Some(on_pass),
+            ..RenderRequest::new(width, height)
+        };
+        let r = self.render_whole(scene, request)?;
+        Ok((r.frame, r.aovs.unwrap_or_default()))
     }
 
-    /// The passes behind every render. With `cancel`, each pass is
-    /// dispatched in bands of [`BAND_ROWS`] rows and `cancel` is asked before
-    /// each band (`Ok(None)` once it says yes); without, a pass is one
-    /// dispatch (the fast path). With `part`, only its rows and passes are
-    /// rendered and the image is their sum ([`Renderer::render_part`]).
-    #[allow(clippy::too_many_arguments)]
-    fn render_passes(
+    /// [`Renderer::render_request`] of a request without `cancel`.
+    fn render_whole(
         &mut self,
         scene: &UploadedScene,
-        width: u32,
-        height: u32,
-        sampling: &Sampling,
-        on_pass: &mut dyn FnMut(&PassInfo),
-        with_aovs: bool,
-        mut cancel: Option<&mut dyn FnMut() -> bool>,
-        part: Option<&PartRange>,
-    ) -> Result<Option<(Frame, Option<Aovs>)>, RenderError> {
+        request: RenderRequest,
+    ) -> Result<Rendered, RenderError> {
+        debug_assert!(request.cancel.is_none());
+        let done = self.render_request(scene, request)?;
+        Ok(done.unwrap_or_else(|| unreachable!("not cancellable")))
+    }
+
+    /// Renders an uploaded scene as `request` says: the one render entry
+    /// point (the others are shorthands for common requests). With
+    /// `cancel`, each tile is dispatched in bands of [`BAND_ROWS`] rows and
+    /// `cancel` is asked before each band (`Ok(None)` once it says yes);
+    /// without, a tile is one submission (the fast path). With `part`, only
+    /// its rows and passes are rendered and the image is their sum
+    /// ([`Renderer::render_part`]).
+    pub fn render_request(
+        &mut self,
+        scene: &UploadedScene,
+        request: RenderRequest,
+    ) -> Result<Option<Rendered>, RenderError> {
+        let RenderRequest {
+            width,
+            height,
+            sampling,
+            part,
+            aovs: with_aovs,
+            on_pass,
+            mut cancel,
+        } = request;
+        let sampling = &sampling;
+        let mut no_report = |_: &PassInfo| {};
+        let on_pass: &mut dyn FnMut(&PassInfo) = match on_pass {
+            Some(f) => f,
+            None => &mut no_report,
+        };
+        let part = part.as_ref();
+        if let Some(part) = part {
+            let h = scene.height;
+            if part.rows.start >= part.rows.end || part.rows.end > h {
+                return Err(RenderError::Scene {
+                    field: "--tile".into(),
+                    message: format!("rows {:?} are not within the image's {h} rows", part.rows),
+                });
+            }
+            if part.passes.start >= part.passes.end || part.passes.end > sampling.spp {
+                return Err(RenderError::Scene {
+                    field: "--passes".into(),
+                    message: format!(
+                        "passes {}..{} are not within 0..{}",
+                        part.passes.start, part.passes.end, sampling.spp
+                    ),
+                });
+            }
+        }
         if width == 0 || height == 0 || width > scene.width || height > scene.height {
             return Err(RenderError::Scene {
                 field: "camera.width/camera.height".into(),
@@ -1079,8 +1163,8 @@ impl Renderer {
                 .zip(stage_times)
                 .collect(),
         };
-        Ok(Some((
-            Frame {
+        Ok(Some(Rendered {
+            frame: Frame {
                 stage_times,
                 image: Image {
                     width,
@@ -1110,7 +1194,7 @@ impl Renderer {
                 },
             },
             aovs,
-        )))
+        }))
     }
 
     /// Renders an uploaded scene at `width`×`height` (one sample per pixel)
@@ -1124,18 +1208,11 @@ impl Renderer {
         height: u32,
         cancel: &mut dyn FnMut() -> bool,
     ) -> Result<Option<Frame>, RenderError> {
-        let sampling = Sampling::default();
-        let done = self.render_passes(
-            scene,
-            width,
-            height,
-            &sampling,
-            &mut |_| {},
-            false,
-            Some(cancel),
-            None,
-        )?;
-        Ok(done.map(|(frame, _)| frame))
+        let request = RenderRequest {
+            cancel: Some(cancel),
+            ..RenderRequest::new(width, height)
+        };
+        Ok(self.render_request(scene, request)?.map(|r| r.frame))
     }
 
     /// Renders one frame of a validated scene: [`Renderer::upload`] then
