@@ -10,7 +10,7 @@
 // reached the point (the shadow stage zeroed the others).
 //
 // penumbra_PushConstants mirrors PushConstants (render.wgsl); the layout
-// test in src/render/layout.rs checks it against the host's.
+// test in src/render/layout/mod.rs checks it against the host's.
 
 struct penumbra_PushConstants {
     origin: vec2<u32>,
@@ -42,7 +42,7 @@ var<immediate> penumbra_push: penumbra_PushConstants;
 
 // render.wgsl's FLAG_WARM_UP, stages/records.wgsl's KIND_NONE, RECORD_TEXELS
 // and QUEUE_TEXELS, and texels.wgsl's TEXEL_ROW (checked against them by
-// src/render/layout.rs).
+// src/render/layout/mod.rs).
 const penumbra_FLAG_WARM_UP: u32 = 1u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;

@@ -347,7 +347,7 @@ impl Renderer {
     }
 
     /// Submits and times every dispatch of a frame on its own, filling
-    /// [`RenderStats::stage_times`] (for benchmarks: a frame is then a little
+    /// [`Frame::stage_times`] (for benchmarks: a frame is then a little
     /// slower than one submission of the whole chain).
     pub fn set_profile_stages(&mut self, on: bool) {
         self.profile_stages = on;
@@ -848,7 +848,7 @@ impl Renderer {
 
     /// Renders an uploaded scene as `request` says: the one render entry
     /// point (the others are shorthands for common requests). With
-    /// `cancel`, each tile is dispatched in bands of [`BAND_ROWS`] rows and
+    /// `cancel`, each tile is dispatched in bands of 64 rows and
     /// `cancel` is asked before each band (`Ok(None)` once it says yes);
     /// without, a tile is one submission (the fast path). With `part`, only
     /// its rows and passes are rendered and the image is their sum

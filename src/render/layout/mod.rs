@@ -1,5 +1,6 @@
 //! The GPU's view of a scene: `#[repr(C)]` mirrors of the WGSL structs in
-//! `shaders/`, and the conversion from the `f64` scene model into them.
+//! `shaders/`, and the conversion from the `f64` scene model into them, one
+//! file per concept of `shaders/` (each struct next to its conversion).
 //!
 //! WGSL aligns `vec3<f32>` to 16 bytes, so every `vec3` is followed by a
 //! 4-byte scalar or explicit padding. The test at the bottom compares every
@@ -15,23 +16,26 @@
 // of their own.
 #![allow(missing_docs)]
 
+mod aov;
+mod bvh;
+mod camera;
+mod lights;
+mod primitives;
+mod queries;
+mod shading;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
-use crate::bvh::{Aabb, Bvh, Chunked};
-use crate::scene::{LightKind, Projection, Scene, Shader, Shape};
+pub use aov::Aov;
+pub use bvh::{node_bounds, node_bounds_f32, BvhNode, PRIM_SPHERE};
+pub use camera::Camera;
+pub use lights::{Light, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_RECT, LIGHT_SPHERE, LIGHT_SPOT};
+pub use primitives::{Plane, Sphere, Triangle, VertexNormals, NO_NORMALS};
+pub use queries::{QueryHit, QueryRay};
+pub use shading::{ShaderNode, SHADER_CHECKER, SHADER_LEAF};
 
-/// Mirrors `Camera` in `shaders/camera.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Camera {
-    pub right: [f32; 3],
-    pub orthographic: u32,
-    pub up: [f32; 3],
-    pub _pad0: u32,
-    pub forward: [f32; 3],
-    pub _pad1: u32,
-}
+use crate::scene::Scene;
 
 /// Mirrors `Globals` in `shaders/render.wgsl`.
 #[repr(C)]
@@ -75,162 +79,6 @@ pub const FLAG_WARM_UP: u32 = 1;
 /// `pass_index` (the first pass of a sample split that does not start at 0).
 pub const FLAG_FRESH: u32 = 2;
 
-/// Mirrors `Plane` in `shaders/primitives/plane.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Plane {
-    pub point: [f32; 3],
-    pub shader: u32,
-    pub normal: [f32; 3],
-    pub object: u32,
-}
-
-/// Mirrors `Sphere` in `shaders/primitives/sphere.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Sphere {
-    pub center: [f32; 3],
-    pub radius: f32,
-    pub shader: u32,
-    pub object: u32,
-    pub _pad: [u32; 2],
-}
-
-/// Mirrors `Triangle` in `shaders/primitives/triangle.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Triangle {
-    pub v0: [f32; 3],
-    pub shader: u32,
-    pub v1: [f32; 3],
-    pub object: u32,
-    pub v2: [f32; 3],
-    pub normals: u32,
-}
-
-/// `Triangle::normals` value for flat-shaded triangles.
-pub const NO_NORMALS: u32 = u32::MAX;
-
-/// Mirrors `VertexNormals` in `shaders/primitives/triangle.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct VertexNormals {
-    pub n0: [f32; 4],
-    pub n1: [f32; 4],
-    pub n2: [f32; 4],
-}
-
-/// Mirrors `Light` in `shaders/lights.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Light {
-    pub position: [f32; 3],
-    pub kind: u32,
-    pub direction: [f32; 3],
-    pub cone_scale: f32,
-    pub ambient: [f32; 3],
-    pub cone_offset: f32,
-    pub diffuse: [f32; 3],
-    pub samples: u32,
-    pub specular: [f32; 3],
-    pub radius: f32,
-    pub edge1: [f32; 3],
-    pub intensity: f32,
-    pub edge2: [f32; 3],
-    pub _pad1: u32,
-}
-
-/// Mirrors `ShaderNode` in `shaders/shading/shader.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct ShaderNode {
-    pub cell_offset: [f32; 3],
-    pub inv_size: f32,
-    pub kind: u32,
-    pub parity: u32,
-    pub even: u32,
-    pub odd: u32,
-    pub program: u32,
-    pub params: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-}
-
-/// Mirrors `BvhNode` in `shaders/bvh.wgsl`: an interior node's two
-/// children, their boxes quantised in the node's frame (see
-/// [`super::quantised_bvh`]); 32 bytes, two texels.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    /// The frame's lower corner, per axis `k·2^e` in one word: the signed
-    /// step count `k` in the upper 24 bits, the step's biased exponent
-    /// `e + 127` (as in an `f32`) in the low 8.
-    pub origin: [u32; 3],
-    /// Child reference: a record index, or `LEAF | first primitive`.
-    pub left: u32,
-    /// Twelve steps, a byte each: the left child's lower then upper corner
-    /// (x, y, z), then the right child's.
-    pub quantised: [u32; 3],
-    /// The right child's reference.
-    pub right: u32,
-}
-
-/// Mirrors `QueryRay` in `shaders/queries.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct QueryRay {
-    pub origin: [f32; 3],
-    pub _pad0: u32,
-    pub dir: [f32; 3],
-    pub _pad1: u32,
-}
-
-/// Mirrors `QueryHit` in `shaders/queries.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct QueryHit {
-    pub t: f32,
-    pub kind: u32,
-    pub index: u32,
-    pub u: f32,
-    pub v: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
-}
-
-/// Mirrors `Aov` in `shaders/aov.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Aov {
-    pub depth: f32,
-    pub normal_x: f32,
-    pub normal_y: f32,
-    pub normal_z: f32,
-    pub u: f32,
-    pub v: f32,
-    pub object: u32,
-    pub primitive: u32,
-}
-
-pub use crate::bvh::PRIM_SPHERE;
-
-/// Shader kinds, as in `shaders/shading/shader.wgsl`: a leaf (a shader
-/// file with its parameters).
-pub const SHADER_LEAF: u32 = 0;
-/// Checker shader kind.
-pub const SHADER_CHECKER: u32 = 2;
-/// Light kinds, as in `shaders/lights.wgsl`.
-pub const LIGHT_DIRECTIONAL: u32 = 0;
-/// Point light kind.
-pub const LIGHT_POINT: u32 = 1;
-/// Spot light kind.
-pub const LIGHT_SPOT: u32 = 2;
-/// Rectangular area light kind.
-pub const LIGHT_RECT: u32 = 3;
-/// Sphere area light kind.
-pub const LIGHT_SPHERE: u32 = 4;
-
 /// A scene laid out for the GPU.
 #[derive(Clone, Debug, Default)]
 pub struct GpuScene {
@@ -247,15 +95,15 @@ pub struct GpuScene {
     pub bvh_depth: usize,
 }
 
-fn f3(v: DVec3) -> [f32; 3] {
+pub(super) fn f3(v: DVec3) -> [f32; 3] {
     v.as_vec3().to_array()
 }
 
-fn c3(v: Vec3) -> [f32; 3] {
+pub(super) fn c3(v: Vec3) -> [f32; 3] {
     v.to_array()
 }
 
-fn n4(v: DVec3) -> [f32; 4] {
+pub(super) fn n4(v: DVec3) -> [f32; 4] {
     v.as_vec3().extend(0.0).to_array()
 }
 
@@ -263,152 +111,21 @@ impl GpuScene {
     /// Lays out a validated scene, camera-relative (without a BVH: see
     /// [`GpuScene::build_bvh`]).
     pub fn new(scene: &Scene) -> GpuScene {
-        let cam = &scene.camera;
-        let eye = cam.position;
-        let (hw, hh) = cam.half_extent();
-        let camera = Camera {
-            right: f3(cam.orientation.x_axis * hw),
-            orthographic: matches!(cam.projection, Projection::Orthographic { .. }) as u32,
-            up: f3(cam.orientation.y_axis * hh),
-            _pad0: 0,
-            forward: f3(-cam.orientation.z_axis),
-            _pad1: 0,
-        };
+        let eye = scene.camera.position;
         let mut g = GpuScene::default();
         for (object, o) in scene.objects.iter().enumerate() {
-            let (shader, object) = (o.shader as u32, object as u32);
-            let push_triangle = |v: [DVec3; 3], normals: Option<[DVec3; 3]>, g: &mut GpuScene| {
-                let normals = match normals {
-                    Some([a, b, c]) => {
-                        g.vertex_normals.push(VertexNormals {
-                            n0: n4(a),
-                            n1: n4(b),
-                            n2: n4(c),
-                        });
-                        g.vertex_normals.len() as u32 - 1
-                    }
-                    None => NO_NORMALS,
-                };
-                // Camera-relative in f64, then rounded: a vertex shared by
-                // several triangles gets the same bits in each (watertight).
-                g.triangles.push(Triangle {
-                    v0: f3(v[0] - eye),
-                    shader,
-                    v1: f3(v[1] - eye),
-                    object,
-                    v2: f3(v[2] - eye),
-                    normals,
-                });
-            };
-            match &o.shape {
-                Shape::Plane(p) => g.planes.push(Plane {
-                    point: f3(closest_point_to(p.point, p.normal, eye) - eye),
-                    shader,
-                    normal: f3(p.normal),
-                    object,
-                }),
-                Shape::Sphere(s) => g.spheres.push(Sphere {
-                    center: f3(s.center - eye),
-                    radius: s.radius as f32,
-                    shader,
-                    object,
-                    _pad: [0; 2],
-                }),
-                Shape::Triangle(t) => push_triangle(t.vertices, None, &mut g),
-                Shape::Mesh(m) => {
-                    for (i, idx) in m.indices.iter().enumerate() {
-                        let normals = m.normals.as_ref().map(|n| idx.map(|k| n[k as usize]));
-                        push_triangle(m.triangle(i).vertices, normals, &mut g);
-                    }
-                }
-            }
+            primitives::push_object(&mut g, o, object as u32, eye);
         }
-        for l in &scene.lights {
-            let mut gl = Light {
-                ambient: c3(l.ambient),
-                diffuse: c3(l.diffuse),
-                specular: c3(l.specular),
-                intensity: l.intensity,
-                samples: 1,
-                ..Default::default()
-            };
-            match l.kind {
-                LightKind::Directional { direction } => {
-                    gl.kind = LIGHT_DIRECTIONAL;
-                    gl.direction = f3(direction);
-                }
-                LightKind::Point { position } => {
-                    gl.kind = LIGHT_POINT;
-                    gl.position = f3(position - eye);
-                }
-                LightKind::Spot {
-                    position,
-                    direction,
-                    inner_angle,
-                    outer_angle,
-                } => {
-                    let (scale, offset) =
-                        LightKind::spot_cone_scale_offset(inner_angle, outer_angle);
-                    gl.kind = LIGHT_SPOT;
-                    gl.position = f3(position - eye);
-                    gl.direction = f3(direction);
-                    gl.cone_scale = scale as f32;
-                    gl.cone_offset = offset as f32;
-                }
-                LightKind::Rect {
-                    corner,
-                    edge1,
-                    edge2,
-                    samples,
-                } => {
-                    gl.kind = LIGHT_RECT;
-                    gl.position = f3(corner - eye);
-                    gl.edge1 = f3(edge1);
-                    gl.edge2 = f3(edge2);
-                    gl.direction = f3(edge1.cross(edge2).normalize());
-                    gl.samples = samples;
-                }
-                LightKind::Sphere {
-                    center,
-                    radius,
-                    samples,
-                } => {
-                    gl.kind = LIGHT_SPHERE;
-                    gl.position = f3(center - eye);
-                    gl.radius = radius as f32;
-                    gl.samples = samples;
-                }
-            }
-            g.lights.push(gl);
-        }
+        g.lights = scene.lights.iter().map(|l| lights::light(l, eye)).collect();
         // Leaves get their program and parameters from the shade stage's
-        // materials (super::materials), which read the shader files.
-        for sh in &scene.shaders {
-            g.shaders.push(match sh {
-                Shader::Checker(c) => {
-                    // Split the eye's position in cells into whole cells (whose
-                    // parity we keep) and a fraction, in f64.
-                    let cells = eye / c.size;
-                    let whole = cells.floor();
-                    let parity = (whole.x + whole.y + whole.z).rem_euclid(2.0) as u32;
-                    ShaderNode {
-                        kind: SHADER_CHECKER,
-                        inv_size: (1.0 / c.size) as f32,
-                        cell_offset: f3(cells - whole),
-                        parity,
-                        even: c.even as u32,
-                        odd: c.odd as u32,
-                        ..Default::default()
-                    }
-                }
-                _ => ShaderNode {
-                    kind: SHADER_LEAF,
-                    ..Default::default()
-                },
-            });
-        }
+        // materials (super::shade), which read the shader files.
+        g.shaders = scene
+            .shaders
+            .iter()
+            .map(|sh| shading::node(sh, eye))
+            .collect();
         g.globals = Globals {
-            camera,
+            camera: camera::camera(&scene.camera),
             background: c3(scene.background),
             num_planes: g.planes.len() as u32,
             num_spheres: g.spheres.len() as u32,
@@ -422,83 +139,6 @@ impl GpuScene {
         };
         g
     }
-
-    /// Builds the BVH over the primitives exactly as the GPU sees them (the
-    /// rounded `f32` values), with boxes rounded outwards to `f32` and padded
-    /// by a few ulps so that no hit the intersection routines report can lie
-    /// outside its box ([`node_bounds`]), and encodes it for the kernel
-    /// ([`super::quantised_bvh`]).
-    pub fn build_bvh(&mut self) {
-        let built = self.build_chunked();
-        self.encode_bvh(&built);
-    }
-
-    /// The second half of [`GpuScene::build_bvh`]: the kernel's primitive
-    /// references and records of `built`, from [`GpuScene::build_chunked`].
-    pub fn encode_bvh(&mut self, built: &Chunked) {
-        let mut prims = built.prim_refs(self.triangles.len());
-        self.bvh_nodes = super::quantised_bvh::encode(built, &mut prims);
-        self.bvh_prims = prims;
-        self.bvh_depth = built.depth;
-        self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
-    }
-
-    /// The host tree [`GpuScene::build_bvh`] encodes, flattened: over the
-    /// triangles, then the spheres (the build is deterministic, so calling
-    /// this again gives the same tree).
-    pub fn build_tree(&self) -> Bvh {
-        self.build_chunked().flatten()
-    }
-
-    /// The first half of [`GpuScene::build_bvh`]: the host tree as the
-    /// builder leaves it (see [`GpuScene::build_tree`]).
-    pub fn build_chunked(&self) -> Chunked {
-        // Triangle boxes straight from the f32 vertices (exact); sphere
-        // boxes computed in f64 and rounded outwards.
-        let spheres: Vec<([f32; 3], [f32; 3])> = self
-            .spheres
-            .iter()
-            .map(|s| {
-                let c = DVec3::from_array(s.center.map(f64::from));
-                let r = DVec3::splat(s.radius as f64);
-                node_bounds_f32(Aabb {
-                    min: c - r,
-                    max: c + r,
-                })
-            })
-            .collect();
-        let triangles = &self.triangles;
-        Bvh::build_f32_chunked(triangles.len() + spheres.len(), |i| {
-            let Some(t) = triangles.get(i) else {
-                return spheres[i - triangles.len()];
-            };
-            let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
-            (a.min(b).min(c).to_array(), a.max(b).max(c).to_array())
-        })
-    }
-}
-
-/// A box padded by 2⁻²⁰ of its largest coordinate magnitude (a few `f32`
-/// ulps), so it contains the rounding error of the ray/primitive tests: the
-/// boxes the kernel's BVH records contain.
-pub fn node_bounds(b: Aabb) -> Aabb {
-    let pad = b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u64 << 20) as f64);
-    Aabb {
-        min: b.min - pad,
-        max: b.max + pad,
-    }
-}
-
-/// [`node_bounds`] rounded outwards to `f32`: it contains the `f64` box and
-/// the rounding error of the ray/primitive tests.
-pub fn node_bounds_f32(b: Aabb) -> ([f32; 3], [f32; 3]) {
-    node_bounds(b).outward_f32()
-}
-
-/// The point of a plane nearest to `eye`: a far-away `point` on the plane
-/// would lose precision when rounded; this one is as close as the plane gets.
-fn closest_point_to(point: DVec3, normal: DVec3, eye: DVec3) -> DVec3 {
-    eye - normal * normal.dot(eye - point)
 }
 
 #[cfg(test)]
