@@ -12,6 +12,10 @@
 
 use std::time::Duration;
 
+#[path = "bench/machine.rs"]
+#[allow(dead_code)]
+mod machine;
+
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::tiles::{TilePlan, DEFAULT_STAGE_MEMORY};
 use penumbra::render::{Renderer, RendererOptions};
@@ -77,26 +81,14 @@ fn main() -> anyhow::Result<()> {
         v.sort();
         v[v.len() / 2]
     };
-    let cpu = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-    let field = |k: &str| {
-        cpu.lines()
-            .find(|l| l.starts_with(k))
-            .and_then(|l| l.split(':').nth(1))
-            .map(str::trim)
-            .unwrap_or("?")
-            .to_string()
-    };
-    let avx512 = field("flags").contains("avx512f");
     println!(
         "{path} at {w}x{h}, {} tiles of {:.1} MiB stage memory, {frames} frames",
         first.stats.tiles,
         first.stats.stage_bytes as f64 / 1048576.0
     );
     println!(
-        "machine: {} (family {}, model {}, AVX-512: {avx512}); device: {}",
-        field("model name"),
-        field("cpu family"),
-        field("model\t"),
+        "machine: {}; device: {}",
+        machine::CpuInfo::read().describe(),
         r.device().name
     );
     for (i, (name, _)) in first.stage_times.iter().enumerate() {

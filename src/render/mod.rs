@@ -143,8 +143,6 @@ pub struct UploadedScene {
     shaders: Vec<crate::scene::Shader>,
     /// Shade programs and parameters.
     materials: Materials,
-    /// Bumped whenever the materials are rebuilt.
-    materials_generation: u64,
     /// Light samples per pixel and pass, over all lights.
     light_samples: u32,
     /// Lights (the host uploads a placeholder for a scene without any,
@@ -247,7 +245,6 @@ struct Cached {
 #[derive(Clone, Debug, PartialEq)]
 struct HitKey {
     upload: u64,
-    materials: u64,
     traversal: u64,
     size: [u32; 2],
     rows: std::ops::Range<u32>,
@@ -741,7 +738,6 @@ impl Renderer {
             id: self.uploads,
             shaders: scene.shaders.clone(),
             materials,
-            materials_generation: 0,
             light_samples,
             light_count: gpu.lights.len() as u32,
             features: scene.features(),
@@ -975,7 +971,6 @@ impl Renderer {
         let reusable = tiles.len() == 1 && chunks.len() == 1 && end_pass - first_pass == 1;
         let key = |pass_index: u32| HitKey {
             upload: scene.id,
-            materials: scene.materials_generation,
             traversal: self.traversal_generation,
             size: [width, height],
             rows: rows.clone(),

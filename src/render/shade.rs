@@ -92,7 +92,7 @@ pub fn assemble(
     // checks `shade` and `ambient`); a file without Params gets the
     // placeholder that `shade` still takes.
     let declared = reflect(std::path::Path::new(&label), text).map_err(file_error)?;
-    let placeholder = declared.fields.is_empty() && !declares_params(text);
+    let placeholder = !declared.has_params;
     if placeholder {
         assembled.push_file("(placeholder Params)".into(), PLACEHOLDER_PARAMS);
     }
@@ -111,15 +111,6 @@ pub fn assemble(
 
 /// `Params` for a shader file that declares none.
 const PLACEHOLDER_PARAMS: &str = "struct Params {\n    penumbra_unused: u32,\n}\n";
-
-/// Whether `text` declares a `struct Params` (possibly empty, which WGSL
-/// itself refuses and naga reports).
-fn declares_params(text: &str) -> bool {
-    text.split("struct").skip(1).any(|rest| {
-        rest.trim_start().starts_with("Params")
-            && rest.trim_start()[6..].trim_start().starts_with('{')
-    })
-}
 
 /// A shader file's reflection error as a compile error (same text).
 fn file_error(e: ShaderFileError) -> CompileError {

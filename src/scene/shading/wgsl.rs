@@ -160,6 +160,8 @@ impl WgslShader {
 /// What [`reflect`] reads from a shader file.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Reflection {
+    /// The file declares `struct Params` (possibly without members).
+    pub has_params: bool,
     /// The members of `Params` in declaration order; empty without `Params`.
     pub fields: Vec<ParamField>,
     /// The file defines `fn ambient`.
@@ -498,6 +500,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     }
     let offset = text.len();
     text.push_str(source);
+    let has_params = params_at.is_some();
     if params_at.is_none() {
         text.push('\n');
         text.push_str(PLACEHOLDER_PARAMS);
@@ -627,6 +630,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     }
 
     Ok(Reflection {
+        has_params,
         fields,
         has_ambient: ambient.is_some(),
     })
@@ -690,10 +694,12 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
     fn without_params_or_ambient() {
         let src = "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {\n    return s.normal * l.intensity;\n}\n";
         let r = reflect_str(src).unwrap();
-        assert!(r.fields.is_empty());
+        assert!(r.fields.is_empty() && !r.has_params);
         assert!(!r.has_ambient);
-        // naga parses an empty Params (WGSL proper requires a member): no fields.
+        // naga parses an empty Params (WGSL proper requires a member): no
+        // fields, but declared (the engine must not add its placeholder).
         let r = reflect_str(&format!("struct Params {{}}\n{src}")).unwrap();
+        assert!(r.has_params);
         assert!(r.fields.is_empty());
     }
 
