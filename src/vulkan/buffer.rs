@@ -71,11 +71,8 @@ impl Buffer {
 
     /// The persistent mapping; an error for buffers that go through staging.
     fn mapping(&self) -> Result<NonNull<u8>, VulkanError> {
-        let result = vk::Result::ERROR_MEMORY_MAP_FAILED;
-        self.mapped.ok_or(VulkanError::Vk {
-            what: "vkMapMemory",
-            result,
-        })
+        self.mapped
+            .ok_or_else(|| VulkanError::vk("vkMapMemory", vk::Result::ERROR_MEMORY_MAP_FAILED))
     }
 
     /// Writes `data` followed by zeros into the mapped memory.
@@ -261,10 +258,7 @@ impl Context {
                         "allocating {} for {what} failed: {result}",
                         mib(requirements.size)
                     )),
-                    result => VulkanError::Vk {
-                        what: "vkAllocateMemory",
-                        result,
-                    },
+                    result => VulkanError::vk("vkAllocateMemory", result),
                 }
             })?;
         Ok((memory, flags))

@@ -137,10 +137,7 @@ impl InstanceHolder {
             unsafe { entry.create_instance(&create_info, None) }.map_err(
                 |result| match result {
                     vk::Result::ERROR_INCOMPATIBLE_DRIVER => VulkanError::NoDevice,
-                    result => VulkanError::Vk {
-                        what: "vkCreateInstance",
-                        result,
-                    },
+                    result => VulkanError::vk("vkCreateInstance", result),
                 },
             )?;
         let mut holder = InstanceHolder {
@@ -394,10 +391,7 @@ impl Context {
             other => {
                 unsafe { device.destroy_command_pool(command_pool, None) };
                 let result = other.err().unwrap_or(vk::Result::ERROR_UNKNOWN);
-                return Err(VulkanError::Vk {
-                    what: "vkAllocateCommandBuffers",
-                    result,
-                });
+                return Err(VulkanError::vk("vkAllocateCommandBuffers", result));
             }
         };
         let instance = &shared.instance.instance;

@@ -40,7 +40,7 @@ pub enum VulkanError {
         /// The Vulkan function that failed.
         what: &'static str,
         /// The error code it returned.
-        result: ash::vk::Result,
+        result: VkCode,
     },
     /// A request exceeds a device limit or could not be satisfied for lack of memory; the
     /// message names the resource, the limit and both numbers.
@@ -63,7 +63,47 @@ pub enum VulkanError {
     },
 }
 
+/// A Vulkan result code as the rest of penumbra sees it: the number, its
+/// name and its description, so that no caller outside this module depends
+/// on `ash`'s types (and on its version).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VkCode {
+    /// The `VkResult` value, e.g. -2 for `VK_ERROR_OUT_OF_DEVICE_MEMORY`.
+    pub code: i32,
+    /// The name without the `VK_` prefix, e.g. `ERROR_OUT_OF_DEVICE_MEMORY`.
+    pub name: String,
+    /// The description the error message shows (the specification's text
+    /// where the code has one, otherwise the name).
+    pub description: String,
+}
+
+impl From<ash::vk::Result> for VkCode {
+    fn from(result: ash::vk::Result) -> VkCode {
+        VkCode {
+            code: result.as_raw(),
+            name: format!("{result:?}"),
+            description: result.to_string(),
+        }
+    }
+}
+
+impl std::fmt::Display for VkCode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.description)
+    }
+}
+
+impl VulkanError {
+    /// [`VulkanError::Vk`] for the Vulkan function `what` that returned `result`.
+    pub(crate) fn vk(what: &'static str, result: ash::vk::Result) -> VulkanError {
+        VulkanError::Vk {
+            what,
+            result: result.into(),
+        }
+    }
+}
+
 /// Builds a `map_err` closure turning a raw Vulkan result into [`VulkanError::Vk`].
 pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> VulkanError {
-    move |result| VulkanError::Vk { what, result }
+    move |result| VulkanError::vk(what, result)
 }

@@ -204,10 +204,8 @@ impl Context {
             unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
         // The module is only needed while the pipeline is being created.
         unsafe { device.destroy_shader_module(module, None) };
-        let pipelines = created.map_err(|(_, result)| VulkanError::Vk {
-            what: "vkCreateComputePipelines",
-            result,
-        })?;
+        let pipelines =
+            created.map_err(|(_, result)| VulkanError::vk("vkCreateComputePipelines", result))?;
         result.pipeline = pipelines.first().copied().unwrap_or_default();
         Ok(result)
     }
