@@ -1,7 +1,10 @@
 //! Writing images: PNG holds the linear colour clamped to [0, 1], sRGB-encoded,
 //! 8 bits; OpenEXR holds linear float RGB. Files are written to a temporary
 //! file beside the target and renamed into place, so a failed run never leaves
-//! a partial file at the output path.
+//! a partial file at the output path. This module owns that atomic write
+//! ([`persist_with`], [`write_atomic`]) for every file penumbra produces: the
+//! render outputs, the farm's parts, scripts and merges, and the watch loop's
+//! previews, each with the [`Durability`] it needs.
 
 use std::io::Write;
 use std::path::Path;
@@ -172,36 +175,68 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Encodes and writes the image atomically (temporary file, then rename).
+/// Encodes and writes the image atomically (temporary file, then rename),
+/// synced to disk ([`Durability::Sync`]).
 pub fn write_image(path: &Path, image: &Image) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     let bytes = encode(image, format).map_err(|error| OutputError::Encode {
         path: path.display().to_string(),
         error,
     })?;
-    persist(path, &bytes)
+    write_atomic(path, &bytes, Durability::Sync)
+}
+
+/// What an atomic write promises beyond atomicity. Either way a reader of
+/// `path` sees the old file or the complete new one, never a partial file,
+/// and a failed write leaves nothing behind; the choice is only about a
+/// crash of the machine (power loss, kernel panic) shortly after the write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Durability {
+    /// The temporary file is synced (`fsync`) before the rename, so that
+    /// after a crash `path` holds the old file or the complete new one. For
+    /// results that cost a render to remake: `penumbra render`'s output, the
+    /// farm's parts, scripts and merged images.
+    Sync,
+    /// No sync: after a crash the file may be empty or stale. For the watch
+    /// loop's previews, rewritten after every stage of every reload: the
+    /// next save rewrites them anyway, and a sync (milliseconds, more on a
+    /// busy disk) would add to every reload's save-to-image latency.
+    NoSync,
 }
 
 /// Writes `bytes` to a temporary file beside `path` and renames it into
-/// place. The file gets the usual permissions (0666 less the umask), not the
-/// private 0600 of a temporary file.
-fn persist(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    persist_with(path, |f| f.write_all(bytes).map_err(anyhow::Error::from)).map_err(|e| {
-        match e.downcast::<OutputError>() {
-            Ok(e) => e,
-            Err(e) => OutputError::Io {
-                path: path.display().to_string(),
-                error: std::io::Error::other(format!("{e:#}")),
-            },
-        }
+/// place, with the given [`Durability`]. The file gets the usual permissions
+/// (0666 less the umask), not the private 0600 of a temporary file.
+pub fn write_atomic(path: &Path, bytes: &[u8], durability: Durability) -> Result<(), OutputError> {
+    persist_with_durability(path, durability, |f| {
+        f.write_all(bytes).map_err(anyhow::Error::from)
+    })
+    .map_err(|e| match e.downcast::<OutputError>() {
+        Ok(e) => e,
+        Err(e) => OutputError::Io {
+            path: path.display().to_string(),
+            error: std::io::Error::other(format!("{e:#}")),
+        },
     })
 }
 
 /// Atomic write of a file produced by `write` (which may stream it): a
 /// temporary file beside `path`, synced and renamed into place only when
 /// `write` succeeds; on any error nothing is left at `path` or beside it.
+/// [`persist_with_durability`] with [`Durability::Sync`].
 pub fn persist_with(
     path: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    persist_with_durability(path, Durability::Sync, write)
+}
+
+/// Atomic write of a file produced by `write`, with the given
+/// [`Durability`]: the one implementation behind [`persist_with`],
+/// [`write_atomic`] and every image penumbra writes.
+pub fn persist_with_durability(
+    path: &Path,
+    durability: Durability,
     write: impl FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let io = |error| OutputError::Io {
@@ -226,7 +261,9 @@ pub fn persist_with(
     if std::env::var_os("PENUMBRA_TEST_INTERNAL_ERROR").is_some() {
         panic!("PENUMBRA_TEST_INTERNAL_ERROR is set");
     }
-    tmp.as_file().sync_all().map_err(io)?;
+    if durability == Durability::Sync {
+        tmp.as_file().sync_all().map_err(io)?;
+    }
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())
 }
@@ -346,5 +383,5 @@ pub fn write_exr_with_aovs(
             path: name.clone(),
             error: std::io::Error::other(e.to_string()),
         })?;
-    persist(path, &bytes)
+    write_atomic(path, &bytes, Durability::Sync)
 }

@@ -33,7 +33,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::loaders::LoadOptions;
-use crate::output::{self, Format};
+use crate::output::{self, Durability, Format};
 use crate::render::compile::SHADER_FILES;
 use crate::render::{Renderer, RendererOptions, ShaderSource};
 use files::{normalise, FileWatcher, WatchSet};
@@ -175,172 +175,259 @@ pub fn run(
     stop: Arc<AtomicBool>,
     events: Sender<Event>,
 ) -> anyhow::Result<()> {
-    let format = output::check_writable(&opts.output)?;
-    let scene_path = normalise(&opts.scene);
-    let shader_dir = match &opts.renderer.shaders {
-        ShaderSource::Directory(d) => Some(
-            d.canonicalize()
-                .map_err(|e| anyhow::anyhow!("--shaders {}: {e}", d.display()))?,
-        ),
-        ShaderSource::Embedded => None,
-    };
-    let mut ropts = opts.renderer.clone();
-    if let Some(d) = &shader_dir {
-        ropts.shaders = ShaderSource::Directory(d.clone());
-    }
-    let renderer = Renderer::new(&ropts)?;
-    let mut session = Session::new(renderer, &scene_path, opts.load.clone());
-
-    let shader_files: Vec<PathBuf> = match &shader_dir {
-        Some(d) => SHADER_FILES
-            .iter()
-            .map(|(f, _)| normalise(&d.join(f)))
-            .collect(),
-        None => Vec::new(),
-    };
-    // The scene's user shader files are shaders: an edit recompiles only
-    // their shade pipelines and keeps the upload and the hit records.
-    let watch_set = |session: &Session| {
-        let user: Vec<PathBuf> = session
-            .user_shader_files()
-            .iter()
-            .map(|p| normalise(p))
-            .collect();
-        WatchSet {
-            scene: session
-                .scene_files()
-                .iter()
-                .map(|p| normalise(p))
-                .filter(|p| !user.contains(p))
-                .collect(),
-            shaders: shader_files.iter().cloned().chain(user).collect(),
-        }
-    };
-    let mut watcher = FileWatcher::new(watch_set(&session), opts.debounce)?;
-
-    let live = Arc::new(server::Live::default());
-    let _server = match opts.serve {
-        Some(addr) => {
-            let s = server::Server::start(addr, live.clone())?;
-            let _ = events.send(Event::Serving {
-                url: format!("http://{}/", s.addr),
-            });
-            Some(s)
-        }
-        None => None,
-    };
-
-    let mut out = Output {
-        path: opts.output.clone(),
-        format,
-        live: opts.serve.map(|_| live.clone()),
-    };
-    let divisors: Vec<u32> = if opts.preview_divisor > 1 {
-        vec![opts.preview_divisor, 1]
-    } else {
-        vec![1]
-    };
-    let describe = |p: &Path| -> String {
-        shader_dir
-            .as_ref()
-            .and_then(|d| p.strip_prefix(d).ok())
-            .or_else(|| p.file_name().map(Path::new))
-            .unwrap_or(p)
-            .display()
-            .to_string()
-    };
-
+    let mut watch = Watch::start(opts, events)?;
     // The first render, then one reload per batch of changes.
-    let mut number = 0u64;
     let mut batch = Some(files::Batch {
         first_event: Instant::now(),
         last_event: Instant::now(),
         paths: Default::default(),
     });
-    let mut announced = false;
     while let Some(b) = batch {
+        watch.reload(b);
+        batch = watch.watcher.next_batch(&stop);
+    }
+    Ok(())
+}
+
+/// What the loop keeps from one reload to the next.
+struct Watch {
+    /// The renderer, the scene upload and the last good pipelines.
+    session: Session,
+    /// The watched files and their debounced events.
+    watcher: FileWatcher,
+    /// The canonical `--shaders` directory (None: embedded shaders).
+    shader_dir: Option<PathBuf>,
+    /// The engine's shader files in `shader_dir`, normalised.
+    shader_files: Vec<PathBuf>,
+    /// Where stages go.
+    out: Output,
+    /// The stages' resolution divisors, preview first.
+    divisors: Vec<u32>,
+    /// Where events go.
+    events: Sender<Event>,
+    /// The number of the next reload (0: the first render).
+    number: u64,
+    /// Whether [`Event::Watching`] was sent.
+    announced: bool,
+    /// The live page's server, kept running as long as the loop.
+    _server: Option<server::Server>,
+}
+
+impl Watch {
+    /// Set-up: checks the output, creates the renderer and the session,
+    /// arms the file watcher on the scene's files and the shaders, and starts
+    /// the live page's server (sending [`Event::Serving`]). Renders nothing.
+    fn start(opts: &WatchOptions, events: Sender<Event>) -> anyhow::Result<Watch> {
+        let format = output::check_writable(&opts.output)?;
+        let scene_path = normalise(&opts.scene);
+        let shader_dir = match &opts.renderer.shaders {
+            ShaderSource::Directory(d) => Some(
+                d.canonicalize()
+                    .map_err(|e| anyhow::anyhow!("--shaders {}: {e}", d.display()))?,
+            ),
+            ShaderSource::Embedded => None,
+        };
+        let mut ropts = opts.renderer.clone();
+        if let Some(d) = &shader_dir {
+            ropts.shaders = ShaderSource::Directory(d.clone());
+        }
+        let renderer = Renderer::new(&ropts)?;
+        let session = Session::new(renderer, &scene_path, opts.load.clone());
+
+        let shader_files: Vec<PathBuf> = match &shader_dir {
+            Some(d) => SHADER_FILES
+                .iter()
+                .map(|(f, _)| normalise(&d.join(f)))
+                .collect(),
+            None => Vec::new(),
+        };
+        let watcher = FileWatcher::new(watch_set(&session, &shader_files), opts.debounce)?;
+
+        let live = Arc::new(server::Live::default());
+        let server = match opts.serve {
+            Some(addr) => {
+                let s = server::Server::start(addr, live.clone())?;
+                let _ = events.send(Event::Serving {
+                    url: format!("http://{}/", s.addr),
+                });
+                Some(s)
+            }
+            None => None,
+        };
+        Ok(Watch {
+            session,
+            watcher,
+            shader_dir,
+            shader_files,
+            out: Output {
+                path: opts.output.clone(),
+                format,
+                live: opts.serve.map(|_| live),
+            },
+            divisors: if opts.preview_divisor > 1 {
+                vec![opts.preview_divisor, 1]
+            } else {
+                vec![1]
+            },
+            events,
+            number: 0,
+            announced: false,
+            _server: server,
+        })
+    }
+
+    /// One reload: applies the batch's changes (everything for the first
+    /// render), follows the scene to the files it now reads, renders and
+    /// writes the stages, publishes the status to the live page and sends
+    /// the [`Event::Reload`].
+    fn reload(&mut self, b: files::Batch) {
+        let number = self.number;
         let changes = if number == 0 {
             Changes {
                 shaders: true,
                 scene: true,
             }
         } else {
+            let set = self.watcher.set();
             Changes {
-                shaders: b.paths.iter().any(|p| watcher.set().shaders.contains(p)),
-                scene: b.paths.iter().any(|p| watcher.set().scene.contains(p)),
+                shaders: b.paths.iter().any(|p| set.shaders.contains(p)),
+                scene: b.paths.iter().any(|p| set.scene.contains(p)),
             }
         };
-        let applied = session.apply(changes);
+        let applied = self.session.apply(changes);
         // The scene may now reference other files.
-        let new_set = watch_set(&session);
-        if &new_set != watcher.set() {
-            if let Err(e) = watcher.update(new_set) {
+        let new_set = watch_set(&self.session, &self.shader_files);
+        if &new_set != self.watcher.set() {
+            if let Err(e) = self.watcher.update(new_set) {
                 eprintln!("warning: cannot watch every scene file: {e}");
             }
         }
-        if !announced {
-            let set = watcher.set();
-            let _ = events.send(Event::Watching {
+        if !self.announced {
+            let set = self.watcher.set();
+            let _ = self.events.send(Event::Watching {
                 files: set.scene.iter().chain(&set.shaders).cloned().collect(),
             });
-            announced = true;
+            self.announced = true;
         }
 
         let mut errors = applied.errors;
+        let (stages, cancelled) = if applied.render {
+            self.render(b.first_event, &mut errors)
+        } else {
+            (Vec::new(), false)
+        };
+        let mut reload = Reload {
+            number,
+            changed: b.paths.into_iter().collect(),
+            changes,
+            compile: applied.compile,
+            upload: applied.upload,
+            stages,
+            cancelled,
+            errors,
+            line: String::new(),
+        };
+        reload.line = reload.summary(applied.render, &self.divisors, |p| {
+            describe(self.shader_dir.as_deref(), p)
+        });
+        if let Some(live) = &self.out.live {
+            let current = self
+                .session
+                .scene_error
+                .iter()
+                .chain(&self.session.shader_error)
+                .cloned()
+                .chain(
+                    reload
+                        .errors
+                        .iter()
+                        .filter(|e| e.starts_with("render error"))
+                        .cloned(),
+                )
+                .collect::<Vec<_>>();
+            let current = (!current.is_empty()).then(|| current.join("\n\n"));
+            live.set_status(current, reload.line.clone());
+        }
+        let _ = self.events.send(Event::Reload(reload));
+        self.number += 1;
+    }
+
+    /// Renders and writes the stages of one reload, the preview first;
+    /// returns the stages written and whether a newer edit cancelled the
+    /// refinement. Render and write errors are added to `errors`.
+    fn render(
+        &mut self,
+        first_event: Instant,
+        errors: &mut Vec<String>,
+    ) -> (Vec<StageReport>, bool) {
+        let full = self.session.size().unwrap_or((1, 1));
         let mut stages = Vec::new();
+        let mut write_errors = Vec::new();
+        let (watcher, out) = (&mut self.watcher, &mut self.out);
+        let rendered = self.session.render_stages(
+            &self.divisors,
+            || watcher.pending(),
+            |frame: StageFrame| match out.write(&frame, full) {
+                Ok((encode, write)) => {
+                    let written_at = Instant::now();
+                    stages.push(StageReport {
+                        width: frame.image.width,
+                        height: frame.image.height,
+                        compile: frame.compile,
+                        render: frame.render,
+                        hits_reused: frame.hits_reused,
+                        encode,
+                        write,
+                        latency: written_at - first_event,
+                        written_at,
+                    });
+                }
+                Err(e) => write_errors.push(e),
+            },
+        );
         let mut cancelled = false;
-        if applied.render {
-            let full = session.size().unwrap_or((1, 1));
-            let mut write_errors = Vec::new();
-            let rendered = session.render_stages(
-                &divisors,
-                || watcher.pending(),
-                |frame: StageFrame| match out.write(&frame, full) {
-                    Ok((encode, write)) => {
-                        let written_at = Instant::now();
-                        stages.push(StageReport {
-                            width: frame.image.width,
-                            height: frame.image.height,
-                            compile: frame.compile,
-                            render: frame.render,
-                            hits_reused: frame.hits_reused,
-                            encode,
-                            write,
-                            latency: written_at - b.first_event,
-                            written_at,
-                        });
-                    }
-                    Err(e) => write_errors.push(e),
-                },
-            );
-            match rendered {
-                Ok(c) => cancelled = c,
-                Err(e) => {
-                    if !errors.contains(&e) {
-                        errors.push(e)
-                    }
+        match rendered {
+            Ok(c) => cancelled = c,
+            Err(e) => {
+                if !errors.contains(&e) {
+                    errors.push(e)
                 }
             }
-            errors.extend(write_errors);
         }
+        errors.extend(write_errors);
+        (stages, cancelled)
+    }
+}
 
-        // The one line.
-        let what = if number == 0 {
+impl Reload {
+    /// The one-line summary of this reload: what changed, the compile (or
+    /// that the kernel was kept), the upload, each stage's render, write and
+    /// latency, a cancellation and whether there were errors. `rendered`:
+    /// the reload rendered (it had something good to show); `divisors`: the
+    /// stages' resolution divisors, preview first; `describe` names a
+    /// changed file.
+    fn summary(
+        &self,
+        rendered: bool,
+        divisors: &[u32],
+        describe: impl Fn(&Path) -> String,
+    ) -> String {
+        let what = if self.number == 0 {
             "start".to_string()
         } else {
             let mut kinds = Vec::new();
-            if changes.shaders {
+            if self.changes.shaders {
                 kinds.push("shaders");
             }
-            if changes.scene {
+            if self.changes.scene {
                 kinds.push("scene");
             }
-            let names: Vec<String> = b.paths.iter().map(|p| describe(p)).collect();
+            let names: Vec<String> = self.changed.iter().map(|p| describe(p)).collect();
             format!("{} ({})", kinds.join("+"), names.join(", "))
         };
-        let mut parts = vec![format!("reload {number}: {what}")];
-        let compile = applied.compile.clone().or_else(|| {
-            stages
+        let mut parts = vec![format!("reload {}: {what}", self.number)];
+        let compile = self.compile.clone().or_else(|| {
+            self.stages
                 .iter()
                 .map(|s| s.compile.clone())
                 .find(|c| c.total() > Duration::ZERO)
@@ -358,13 +445,13 @@ pub fn run(
                 ms(c.pipeline),
                 ms(c.driver)
             ));
-        } else if applied.render {
+        } else if rendered {
             parts.push("kernel kept".into());
         }
-        if let Some(u) = applied.upload {
+        if let Some(u) = self.upload {
             parts.push(format!("load+upload {}", ms(u)));
         }
-        for (i, s) in stages.iter().enumerate() {
+        for (i, s) in self.stages.iter().enumerate() {
             let name = if divisors[i] > 1 { "preview" } else { "full" };
             parts.push(format!(
                 "{name} {}x{}: render {}{}, encode+write {}, latency {}",
@@ -376,48 +463,50 @@ pub fn run(
                 ms(s.latency)
             ));
         }
-        if cancelled {
+        if self.cancelled {
             parts.push("refinement cancelled by a newer edit".into());
         }
-        if !errors.is_empty() {
-            parts.push(if stages.is_empty() {
+        if !self.errors.is_empty() {
+            parts.push(if self.stages.is_empty() {
                 "ERROR: kept the last good image".into()
             } else {
                 "ERROR: see above".into()
             });
         }
-        let line = parts.join(" | ");
-        if let Some(live) = &out.live {
-            let current = session
-                .scene_error
-                .iter()
-                .chain(&session.shader_error)
-                .cloned()
-                .chain(
-                    errors
-                        .iter()
-                        .filter(|e| e.starts_with("render error"))
-                        .cloned(),
-                )
-                .collect::<Vec<_>>();
-            let current = (!current.is_empty()).then(|| current.join("\n\n"));
-            live.set_status(current, line.clone());
-        }
-        let _ = events.send(Event::Reload(Reload {
-            number,
-            changed: b.paths.into_iter().collect(),
-            changes,
-            compile: applied.compile,
-            upload: applied.upload,
-            stages,
-            cancelled,
-            errors,
-            line,
-        }));
-        number += 1;
-        batch = watcher.next_batch(&stop);
+        parts.join(" | ")
     }
-    Ok(())
+}
+
+/// The files to watch: the scene's as scene files, and as shaders the
+/// engine's `shader_files` and the scene's user shader files (an edit of one
+/// recompiles only its shade pipelines and keeps the upload and the hit
+/// records).
+fn watch_set(session: &Session, shader_files: &[PathBuf]) -> WatchSet {
+    let user: Vec<PathBuf> = session
+        .user_shader_files()
+        .iter()
+        .map(|p| normalise(p))
+        .collect();
+    WatchSet {
+        scene: session
+            .scene_files()
+            .iter()
+            .map(|p| normalise(p))
+            .filter(|p| !user.contains(p))
+            .collect(),
+        shaders: shader_files.iter().cloned().chain(user).collect(),
+    }
+}
+
+/// A changed file as the summary line names it: relative to the shader
+/// directory, otherwise its file name.
+fn describe(shader_dir: Option<&Path>, p: &Path) -> String {
+    shader_dir
+        .and_then(|d| p.strip_prefix(d).ok())
+        .or_else(|| p.file_name().map(Path::new))
+        .unwrap_or(p)
+        .display()
+        .to_string()
 }
 
 /// Where stages go: the output file, and the live page.
@@ -428,8 +517,9 @@ struct Output {
 }
 
 impl Output {
-    /// Writes a stage (scaled up to `full`) atomically; returns the encode
-    /// and write times.
+    /// Writes a stage (scaled up to `full`) atomically, without a sync
+    /// ([`Durability::NoSync`]: the next stage or save rewrites it); returns
+    /// the encode and write times.
     fn write(
         &mut self,
         frame: &StageFrame,
@@ -441,8 +531,7 @@ impl Output {
             .map_err(|e| format!("{}: cannot encode: {e}", self.path.display()))?;
         let encode = t0.elapsed();
         let t1 = Instant::now();
-        write_atomic(&self.path, &bytes)
-            .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))?;
+        output::write_atomic(&self.path, &bytes, Durability::NoSync).map_err(|e| e.to_string())?;
         let write = t1.elapsed();
         if let Some(live) = &self.live {
             let png = if self.format == Format::Png {
@@ -454,18 +543,6 @@ impl Output {
         }
         Ok((encode, write))
     }
-}
-
-/// Writes to a temporary file beside `path` and renames it into place.
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
-    tmp.write_all(bytes)?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
 }
 
 /// Runs the loop until `stop` is set, printing as the command line does.
