@@ -228,6 +228,8 @@ impl Reader<'_> {
         Ok(c)
     }
 
+    /// The camera: position, orientation (`look_at`/`up` or yaw, pitch and
+    /// roll), projection, and the image size after `opts`' overrides.
     fn camera(&self, c: &CameraFile, opts: &LoadOptions) -> Result<Camera, SceneError> {
         let position = self.finite("camera.position", c.position)?;
         let euler = c.yaw.is_some() || c.pitch.is_some() || c.roll.is_some();
@@ -496,6 +498,8 @@ impl Reader<'_> {
         })
     }
 
+    /// The shaders of the file, in name order (a shader's id is its place),
+    /// and every WGSL file read.
     fn shaders(
         &self,
         files: &BTreeMap<String, ShaderFile>,
@@ -510,89 +514,113 @@ impl Reader<'_> {
             .collect();
         let mut shaders = Vec::new();
         for (name, s) in files {
-            let at = format!("shaders.{name}");
-            let f = |k: &str| format!("{at}.{k}");
-            let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
-            let checker = s.kind == ShaderKind::Checker;
-            let wgsl = s.kind == ShaderKind::Wgsl;
-            let kind = match s.kind {
-                ShaderKind::Phong => "a phong shader",
-                ShaderKind::BlinnPhong => "a blinn_phong shader",
-                ShaderKind::Checker => "a checker shader",
-                ShaderKind::Wgsl => "a wgsl shader",
-            };
-            fields_for(
-                self.file,
-                &at,
-                kind,
-                &[
-                    ("diffuse", s.diffuse.is_some(), phong),
-                    ("size", s.size.is_some(), checker),
-                    ("even", s.even.is_some(), checker),
-                    ("odd", s.odd.is_some(), checker),
-                    ("file", s.file.is_some(), wgsl),
-                ],
-            )?;
-            for (k, present) in [
-                ("ambient", s.ambient.is_some()),
-                ("specular", s.specular.is_some()),
-                ("shininess", s.shininess.is_some()),
-            ] {
-                if present && !phong {
-                    return Err(self.err(f(k), format!("not a field of {kind}")));
-                }
-            }
-            if s.params.is_some() && !wgsl {
-                return Err(self.err(f("params"), format!("not a field of {kind}")));
-            }
-            if wgsl {
-                shaders.push(Shader::Wgsl(self.wgsl(&at, s, base, guard, &mut read)?));
-                continue;
-            }
-            shaders.push(if phong {
-                let shininess = s.shininess.unwrap_or(1.0);
-                if !(shininess >= 0.0 && shininess.is_finite()) {
-                    return Err(self.err(
-                        f("shininess"),
-                        format!("must be finite and >= 0, got {shininess}"),
-                    ));
-                }
-                let p = Phong {
-                    ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
-                    diffuse: self.colour(&f("diffuse"), s.diffuse.unwrap_or_default())?,
-                    specular: self.colour(&f("specular"), s.specular.unwrap_or_default())?,
-                    shininess,
-                };
-                if s.kind == ShaderKind::Phong {
-                    Shader::Phong(p)
-                } else {
-                    Shader::BlinnPhong(p)
-                }
-            } else {
-                let size = s.size.unwrap_or_default();
-                if !(size > 0.0 && size.is_finite()) {
-                    return Err(self.err(f("size"), format!("must be positive, got {size}")));
-                }
-                let sub = |k: &str, v: &Option<String>| {
-                    let v = v.as_deref().unwrap_or_default();
-                    ids.get(v)
-                        .copied()
-                        .ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
-                };
-                Shader::Checker(Checker {
-                    size,
-                    even: sub("even", &s.even)?,
-                    odd: sub("odd", &s.odd)?,
-                })
-            });
+            shaders.push(self.shader(name, s, &ids, base, guard, &mut read)?);
         }
+        self.checker_cycles(&shaders, &ids)?;
+        Ok((shaders, ids, read.into_keys().collect()))
+    }
+
+    /// Shader `name`: the fields its kind needs (and no others), its
+    /// colours and sizes, a checker's children by name in `ids`, a `wgsl`
+    /// shader's file and params ([`Reader::wgsl`]).
+    fn shader(
+        &self,
+        name: &str,
+        s: &ShaderFile,
+        ids: &BTreeMap<String, ShaderId>,
+        base: &Path,
+        guard: &super::guard::Guard,
+        read: &mut WgslFiles,
+    ) -> Result<Shader, SceneError> {
+        let at = format!("shaders.{name}");
+        let f = |k: &str| format!("{at}.{k}");
+        let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
+        let checker = s.kind == ShaderKind::Checker;
+        let wgsl = s.kind == ShaderKind::Wgsl;
+        let kind = match s.kind {
+            ShaderKind::Phong => "a phong shader",
+            ShaderKind::BlinnPhong => "a blinn_phong shader",
+            ShaderKind::Checker => "a checker shader",
+            ShaderKind::Wgsl => "a wgsl shader",
+        };
+        fields_for(
+            self.file,
+            &at,
+            kind,
+            &[
+                ("diffuse", s.diffuse.is_some(), phong),
+                ("size", s.size.is_some(), checker),
+                ("even", s.even.is_some(), checker),
+                ("odd", s.odd.is_some(), checker),
+                ("file", s.file.is_some(), wgsl),
+            ],
+        )?;
+        for (k, present) in [
+            ("ambient", s.ambient.is_some()),
+            ("specular", s.specular.is_some()),
+            ("shininess", s.shininess.is_some()),
+        ] {
+            if present && !phong {
+                return Err(self.err(f(k), format!("not a field of {kind}")));
+            }
+        }
+        if s.params.is_some() && !wgsl {
+            return Err(self.err(f("params"), format!("not a field of {kind}")));
+        }
+        if wgsl {
+            return Ok(Shader::Wgsl(self.wgsl(&at, s, base, guard, read)?));
+        }
+        Ok(if phong {
+            let shininess = s.shininess.unwrap_or(1.0);
+            if !(shininess >= 0.0 && shininess.is_finite()) {
+                return Err(self.err(
+                    f("shininess"),
+                    format!("must be finite and >= 0, got {shininess}"),
+                ));
+            }
+            let p = Phong {
+                ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
+                diffuse: self.colour(&f("diffuse"), s.diffuse.unwrap_or_default())?,
+                specular: self.colour(&f("specular"), s.specular.unwrap_or_default())?,
+                shininess,
+            };
+            if s.kind == ShaderKind::Phong {
+                Shader::Phong(p)
+            } else {
+                Shader::BlinnPhong(p)
+            }
+        } else {
+            let size = s.size.unwrap_or_default();
+            if !(size > 0.0 && size.is_finite()) {
+                return Err(self.err(f("size"), format!("must be positive, got {size}")));
+            }
+            let sub = |k: &str, v: &Option<String>| {
+                let v = v.as_deref().unwrap_or_default();
+                ids.get(v)
+                    .copied()
+                    .ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
+            };
+            Shader::Checker(Checker {
+                size,
+                even: sub("even", &s.even)?,
+                odd: sub("odd", &s.odd)?,
+            })
+        })
+    }
+
+    /// No cycle among the checker shaders.
+    fn checker_cycles(
+        &self,
+        shaders: &[Shader],
+        ids: &BTreeMap<String, ShaderId>,
+    ) -> Result<(), SceneError> {
         // Checkers nest, but a cycle never resolves. Scene::validate rejects
         // one too, by index; here the error names the shader as the file does.
         let children = |i: ShaderId| match &shaders[i] {
             Shader::Checker(c) => vec![c.even, c.odd],
             _ => Vec::new(),
         };
-        for (name, &start) in &ids {
+        for (name, &start) in ids {
             let mut seen = vec![false; shaders.len()];
             let mut todo = children(start);
             while let Some(i) = todo.pop() {
@@ -607,9 +635,11 @@ impl Reader<'_> {
                 }
             }
         }
-        Ok((shaders, ids, read.into_keys().collect()))
+        Ok(())
     }
 
+    /// Light `i`: the fields its kind needs (and no others), its geometry,
+    /// angles, sample count, intensity and colours.
     fn light(&self, i: usize, l: &LightFile) -> Result<Light, SceneError> {
         let at = format!("lights[{i}]");
         let f = |k: &str| format!("{at}.{k}");
@@ -719,6 +749,154 @@ impl Reader<'_> {
         })
     }
 
+    /// Object `i` of the file, added to `loaded`: the fields its kind
+    /// needs (and no others), its shader by name and its shape; a mesh adds
+    /// one object per glTF mesh ([`Reader::mesh`]).
+    fn object(
+        &self,
+        i: usize,
+        o: &ObjectFile,
+        ids: &BTreeMap<String, ShaderId>,
+        base: &Path,
+        guard: &super::guard::Guard,
+        loaded: &mut Loaded,
+    ) -> Result<(), SceneError> {
+        let at = format!("objects[{i}]");
+        let f = |k: &str| format!("{at}.{k}");
+        let (kind, needs): (&str, [bool; 6]) = match o.kind {
+            // point, normal, center, radius, vertices, file
+            ObjectKind::Plane => ("a plane", [true, true, false, false, false, false]),
+            ObjectKind::Sphere => ("a sphere", [false, false, true, true, false, false]),
+            ObjectKind::Triangle => ("a triangle", [false, false, false, false, true, false]),
+            ObjectKind::Mesh => ("a mesh", [false, false, false, false, false, true]),
+        };
+        fields_for(
+            self.file,
+            &at,
+            kind,
+            &[
+                ("point", o.point.is_some(), needs[0]),
+                ("normal", o.normal.is_some(), needs[1]),
+                ("center", o.center.is_some(), needs[2]),
+                ("radius", o.radius.is_some(), needs[3]),
+                ("vertices", o.vertices.is_some(), needs[4]),
+                ("file", o.file.is_some(), needs[5]),
+                (
+                    "transform",
+                    o.transform.is_some(),
+                    o.kind == ObjectKind::Mesh && o.transform.is_some(),
+                ),
+            ],
+        )?;
+        let shader = match &o.shader {
+            Some(name) => Some(
+                *ids.get(name)
+                    .ok_or_else(|| self.err(f("shader"), format!("no shader named \"{name}\"")))?,
+            ),
+            None if o.kind == ObjectKind::Mesh => None,
+            None => {
+                return Err(self.err(&at, format!("missing field `shader` (required for {kind})")))
+            }
+        };
+        let shape = match o.kind {
+            ObjectKind::Plane => Shape::Plane(Plane {
+                point: self.finite(&f("point"), o.point.unwrap_or_default())?,
+                normal: self.direction(&f("normal"), o.normal.unwrap_or_default())?,
+            }),
+            ObjectKind::Sphere => {
+                let radius = o.radius.unwrap_or_default();
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(self.err(f("radius"), format!("must be positive, got {radius}")));
+                }
+                Shape::Sphere(Sphere {
+                    center: self.finite(&f("center"), o.center.unwrap_or_default())?,
+                    radius,
+                })
+            }
+            ObjectKind::Triangle => {
+                let v = o.vertices.unwrap_or_default();
+                let mut vertices = [DVec3::ZERO; 3];
+                for k in 0..3 {
+                    vertices[k] = self.finite(&f(&format!("vertices[{k}]")), v[k])?;
+                }
+                Shape::Triangle(Triangle { vertices })
+            }
+            ObjectKind::Mesh => return self.mesh(&at, o, shader, base, guard, loaded),
+        };
+        loaded.scene.objects.push(Object {
+            shape,
+            shader: shader.unwrap_or_default(),
+        });
+        Ok(())
+    }
+
+    /// A `mesh` object at `at` with the shader `shader` (None: each glTF
+    /// mesh gets a Phong shader of its base colour): reads the glTF file
+    /// relative to `base`, applies the transform and adds the meshes, the
+    /// notes and the files read to `loaded`.
+    fn mesh(
+        &self,
+        at: &str,
+        o: &ObjectFile,
+        shader: Option<ShaderId>,
+        base: &Path,
+        guard: &super::guard::Guard,
+        loaded: &mut Loaded,
+    ) -> Result<(), SceneError> {
+        let rel = o.file.clone().unwrap_or_default();
+        let mesh_path = base.join(&rel);
+        if !mesh_path.is_file() {
+            return Err(self.err(
+                format!("{at}.file"),
+                format!("no such file: {}", mesh_path.display()),
+            ));
+        }
+        guard
+            .check_path(&mesh_path, "mesh file")
+            .map_err(|e| self.err(format!("{at}.file"), e.0))?;
+        let m = o
+            .transform
+            .as_ref()
+            .map(|t| self.transform(&format!("{at}.transform"), t))
+            .transpose()?
+            .unwrap_or(DMat4::IDENTITY);
+        let doc = super::gltf::read_with(&mesh_path, guard)?;
+        loaded.notes.extend(doc.notes);
+        loaded.files.extend(doc.files);
+        let normal_m = DMat3::from_mat4(m).inverse().transpose();
+        for gm in doc.meshes {
+            let shader = match shader {
+                Some(s) => s,
+                None => {
+                    let kd = gm.base_color.unwrap_or(Vec3::ONE);
+                    loaded.scene.shaders.push(Shader::Phong(Phong {
+                        ambient: Vec3::ZERO,
+                        diffuse: kd,
+                        specular: Vec3::ZERO,
+                        shininess: 1.0,
+                    }));
+                    loaded.scene.shaders.len() - 1
+                }
+            };
+            let mut mesh = gm.mesh;
+            for p in &mut mesh.positions {
+                *p = m.transform_point3(*p);
+            }
+            if let Some(ns) = &mut mesh.normals {
+                for n in ns.iter_mut() {
+                    *n = (normal_m * *n).normalize_or_zero();
+                }
+            }
+            loaded.scene.objects.push(Object {
+                shape: Shape::Mesh(mesh),
+                shader,
+            });
+        }
+        Ok(())
+    }
+
+    /// A mesh's transform at `at`: translate, rotate (degrees about X, then
+    /// Y, then Z) and a positive scale.
     fn transform(&self, at: &str, t: &TransformFile) -> Result<DMat4, SceneError> {
         let translate = self.finite(&format!("{at}.translate"), t.translate)?;
         let r = self.finite(&format!("{at}.rotate"), t.rotate)?;
@@ -740,16 +918,16 @@ impl Reader<'_> {
     }
 }
 
-/// Reads a JSON scene file.
-pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
-    let guard = super::guard::Guard::new(path, opts);
+/// Reads and parses a JSON scene file within the guard's limits: strict
+/// deserialisation, an error naming the JSON path of the field.
+fn parse(path: &Path, guard: &super::guard::Guard) -> Result<SceneFile, SceneError> {
     let bytes = guard
         .read(path, "scene")
         .map_err(|e| SceneError::new(path, "", e.0))?;
     let text = String::from_utf8(bytes)
         .map_err(|e| SceneError::new(path, "", format!("cannot read scene: {e}")))?;
     let de = &mut serde_json::Deserializer::from_str(&text);
-    let file: SceneFile = serde_path_to_error::deserialize(de).map_err(|e| {
+    serde_path_to_error::deserialize(de).map_err(|e| {
         let field = e.path().to_string();
         let inner = e.into_inner();
         // serde_json appends " at line L column C"; keep it, it helps.
@@ -758,145 +936,40 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
             if field == "." { String::new() } else { field },
             inner.to_string(),
         )
-    })?;
+    })
+}
+
+/// Reads a JSON scene file: parses it, then reads the camera, the
+/// background, the shaders, the objects and the lights in this order (the
+/// first error is reported).
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
+    let guard = super::guard::Guard::new(path, opts);
+    let file = parse(path, &guard)?;
     let r = Reader { file: path };
     let camera = r.camera(&file.camera, opts)?;
     let background = r.colour("background", file.background)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let (mut shaders, ids, shader_files) = r.shaders(&file.shaders, base, &guard)?;
-    let mut objects = Vec::new();
-    let mut notes = Vec::new();
-    let mut files = vec![path.to_path_buf()];
-    files.extend(shader_files);
+    let (shaders, ids, shader_files) = r.shaders(&file.shaders, base, &guard)?;
+    let mut loaded = Loaded {
+        scene: Scene {
+            camera,
+            background,
+            shaders,
+            objects: Vec::new(),
+            lights: Vec::new(),
+        },
+        notes: Vec::new(),
+        files: vec![path.to_path_buf()],
+    };
+    loaded.files.extend(shader_files);
     for (i, o) in file.objects.iter().enumerate() {
-        let at = format!("objects[{i}]");
-        let f = |k: &str| format!("{at}.{k}");
-        let (kind, needs): (&str, [bool; 6]) = match o.kind {
-            // point, normal, center, radius, vertices, file
-            ObjectKind::Plane => ("a plane", [true, true, false, false, false, false]),
-            ObjectKind::Sphere => ("a sphere", [false, false, true, true, false, false]),
-            ObjectKind::Triangle => ("a triangle", [false, false, false, false, true, false]),
-            ObjectKind::Mesh => ("a mesh", [false, false, false, false, false, true]),
-        };
-        fields_for(
-            path,
-            &at,
-            kind,
-            &[
-                ("point", o.point.is_some(), needs[0]),
-                ("normal", o.normal.is_some(), needs[1]),
-                ("center", o.center.is_some(), needs[2]),
-                ("radius", o.radius.is_some(), needs[3]),
-                ("vertices", o.vertices.is_some(), needs[4]),
-                ("file", o.file.is_some(), needs[5]),
-                (
-                    "transform",
-                    o.transform.is_some(),
-                    o.kind == ObjectKind::Mesh && o.transform.is_some(),
-                ),
-            ],
-        )?;
-        let shader = match &o.shader {
-            Some(name) => Some(
-                *ids.get(name)
-                    .ok_or_else(|| r.err(f("shader"), format!("no shader named \"{name}\"")))?,
-            ),
-            None if o.kind == ObjectKind::Mesh => None,
-            None => return Err(r.err(&at, format!("missing field `shader` (required for {kind})"))),
-        };
-        let shape = match o.kind {
-            ObjectKind::Plane => Shape::Plane(Plane {
-                point: r.finite(&f("point"), o.point.unwrap_or_default())?,
-                normal: r.direction(&f("normal"), o.normal.unwrap_or_default())?,
-            }),
-            ObjectKind::Sphere => {
-                let radius = o.radius.unwrap_or_default();
-                if !(radius > 0.0 && radius.is_finite()) {
-                    return Err(r.err(f("radius"), format!("must be positive, got {radius}")));
-                }
-                Shape::Sphere(Sphere {
-                    center: r.finite(&f("center"), o.center.unwrap_or_default())?,
-                    radius,
-                })
-            }
-            ObjectKind::Triangle => {
-                let v = o.vertices.unwrap_or_default();
-                let mut vertices = [DVec3::ZERO; 3];
-                for k in 0..3 {
-                    vertices[k] = r.finite(&f(&format!("vertices[{k}]")), v[k])?;
-                }
-                Shape::Triangle(Triangle { vertices })
-            }
-            ObjectKind::Mesh => {
-                let rel = o.file.clone().unwrap_or_default();
-                let mesh_path = base.join(&rel);
-                if !mesh_path.is_file() {
-                    return Err(r.err(f("file"), format!("no such file: {}", mesh_path.display())));
-                }
-                guard
-                    .check_path(&mesh_path, "mesh file")
-                    .map_err(|e| r.err(f("file"), e.0))?;
-                let m = o
-                    .transform
-                    .as_ref()
-                    .map(|t| r.transform(&f("transform"), t))
-                    .transpose()?
-                    .unwrap_or(DMat4::IDENTITY);
-                let doc = super::gltf::read_with(&mesh_path, &guard)?;
-                notes.extend(doc.notes);
-                files.extend(doc.files);
-                let normal_m = DMat3::from_mat4(m).inverse().transpose();
-                for gm in doc.meshes {
-                    let shader = match shader {
-                        Some(s) => s,
-                        None => {
-                            let kd = gm.base_color.unwrap_or(Vec3::ONE);
-                            shaders.push(Shader::Phong(Phong {
-                                ambient: Vec3::ZERO,
-                                diffuse: kd,
-                                specular: Vec3::ZERO,
-                                shininess: 1.0,
-                            }));
-                            shaders.len() - 1
-                        }
-                    };
-                    let mut mesh = gm.mesh;
-                    for p in &mut mesh.positions {
-                        *p = m.transform_point3(*p);
-                    }
-                    if let Some(ns) = &mut mesh.normals {
-                        for n in ns.iter_mut() {
-                            *n = (normal_m * *n).normalize_or_zero();
-                        }
-                    }
-                    objects.push(Object {
-                        shape: Shape::Mesh(mesh),
-                        shader,
-                    });
-                }
-                continue;
-            }
-        };
-        objects.push(Object {
-            shape,
-            shader: shader.unwrap_or_default(),
-        });
+        r.object(i, o, &ids, base, &guard, &mut loaded)?;
     }
-    let lights = file
+    loaded.scene.lights = file
         .lights
         .iter()
         .enumerate()
         .map(|(i, l)| r.light(i, l))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(Loaded {
-        scene: Scene {
-            camera,
-            background,
-            shaders,
-            objects,
-            lights,
-        },
-        notes,
-        files,
-    })
+    Ok(loaded)
 }
