@@ -20,7 +20,7 @@ use penumbra::vulkan::{Context, DeviceSelector};
 #[command(
     name = "penumbra",
     version,
-    about = "Headless ray tracer in Vulkan compute shaders (lavapipe or any Vulkan GPU)"
+    about = "Headless ray tracer in Vulkan compute kernels (lavapipe or any Vulkan GPU)"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -701,26 +701,24 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         _ => String::new(),
     };
     println!(
-        "{} ({}): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, shader compile {}, pipeline creation {}, driver compile {}, BVH build {}, upload {}, GPU render {}, readback {}, write {} | {:.1} Mrays/s{}",
-        dev.name,
-        dev.device_type,
-        frame.image.width,
-        frame.image.height,
-        s.passes,
-        s.rays(),
-        s.primary_rays,
-        s.shadow_rays,
-        ms(load),
-        ms(t.shader_compile),
-        ms(t.pipeline_creation),
-        ms(t.driver_compile),
-        ms(t.accel_build),
-        ms(t.upload),
-        ms(t.render),
-        ms(t.readback),
-        ms(write),
-        s.mrays_per_second(),
-        width_note
+        "{}",
+        summary_line(
+            &format!("{} ({})", dev.name, dev.device_type),
+            &frame.image,
+            s,
+            &[
+                ("load", load),
+                ("shader compile", t.shader_compile),
+                ("pipeline creation", t.pipeline_creation),
+                ("driver compile", t.driver_compile),
+                ("BVH build", t.accel_build),
+                ("upload", t.upload),
+                ("GPU render", t.render),
+                ("readback", t.readback),
+                ("write", write),
+            ],
+            &width_note,
+        )
     );
     Ok(())
 }
@@ -817,20 +815,48 @@ fn render_reference(
     let write = t1.elapsed();
     let s = &frame.stats;
     println!(
-        "CPU reference (f64): {}x{}, {} spp, {} rays ({} primary + {} shadow) | load {}, BVH build {}, render {}, write {} | {:.1} Mrays/s",
-        frame.image.width,
-        frame.image.height,
-        s.passes,
-        s.rays(),
-        s.primary_rays,
-        s.shadow_rays,
-        ms(load),
-        ms(s.timings.accel_build),
-        ms(s.timings.render),
-        ms(write),
-        s.mrays_per_second()
+        "{}",
+        summary_line(
+            "CPU reference (f64)",
+            &frame.image,
+            s,
+            &[
+                ("load", load),
+                ("BVH build", s.timings.accel_build),
+                ("render", s.timings.render),
+                ("write", write),
+            ],
+            "",
+        )
     );
     Ok(())
+}
+
+/// The one summary line of `penumbra render`, on the GPU or the CPU
+/// reference: `WHO: WxH, N spp, R rays (P primary + S shadow) | PHASE TIME,
+/// … | X Mrays/s`, then `note` (empty, or ` | …`).
+fn summary_line(
+    who: &str,
+    image: &penumbra::frame::Image,
+    stats: &penumbra::frame::RenderStats,
+    phases: &[(&str, std::time::Duration)],
+    note: &str,
+) -> String {
+    let phases: Vec<String> = phases
+        .iter()
+        .map(|(name, d)| format!("{name} {}", ms(*d)))
+        .collect();
+    format!(
+        "{who}: {}x{}, {} spp, {} rays ({} primary + {} shadow) | {} | {:.1} Mrays/s{note}",
+        image.width,
+        image.height,
+        stats.passes,
+        stats.rays(),
+        stats.primary_rays,
+        stats.shadow_rays,
+        phases.join(", "),
+        stats.mrays_per_second()
+    )
 }
 
 /// Uploads and renders in passes, with a progress bar (passes and rays/s)
