@@ -12,7 +12,7 @@
 use glam::DVec3;
 
 /// Farther than anything in a scene: "no hit yet", and the length of shadow
-/// rays towards directional lights (the shader's `FAR`).
+/// rays towards directional lights (the kernel's `FAR`).
 pub const FAR: f64 = 3.0e38;
 
 /// A ray with what the watertight triangle test needs of it.
@@ -153,7 +153,7 @@ impl Triangle {
     }
 }
 
-/// Woop, Benthin and Wald's watertight test, in the shader's order (edge
+/// Woop, Benthin and Wald's watertight test, in the kernel's order (edge
 /// functions first, rejecting as soon as their signs differ, then t): returns
 /// `(t, u, v)` with `u`, `v` the weights of `v1` and `v2`, for a hit with
 /// `0 < t < t_max`.
@@ -180,7 +180,7 @@ pub fn triangle(tri: &Triangle, ray: &Ray, t_max: f64) -> Option<(f64, f64, f64)
     }
     let det = u + v + w;
     // A zero-area triangle can pass the sign tests through the rounding of
-    // the shear; reject it by its true area (as the shader and pbrt-v4 do).
+    // the shear; reject it by its true area (as the kernel and pbrt-v4 do).
     if det == 0.0 || tri.degenerate {
         return None;
     }

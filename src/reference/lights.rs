@@ -159,7 +159,7 @@ pub fn sample_light(light: &Light, p: DVec3, uv: [f64; 2]) -> LightSample {
         ),
         Kind::Sphere { center, radius } => {
             // Uniform on the sphere: z uniform in [−1, 1], azimuth uniform.
-            // (The shader's 2π is the f32 6.2831855; this is the exact one.)
+            // (The kernel's 2π is the f32 6.2831855; this is the exact one.)
             let z = 1.0 - 2.0 * uv[0];
             let r = (1.0 - z * z).max(0.0).sqrt();
             let phi = std::f64::consts::TAU * uv[1];

@@ -12,7 +12,7 @@
 //! parallel with rayon; a BVH ([`crate::bvh`]) only speeds the search up.
 //! It is not a product path: it is written to be obviously right, not fast.
 //!
-//! The files follow the shader concepts: [`camera`], [`intersect`] (ray,
+//! The files follow the concepts of `shaders/`: [`camera`], [`intersect`] (ray,
 //! plane, sphere, triangle), [`bvh`], [`hit`], [`lights`], [`shading`],
 //! [`shadows`], [`sampling`].
 //!

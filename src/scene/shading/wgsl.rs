@@ -1,4 +1,4 @@
-//! Shaders written as WGSL files (issue 13): the scene model of one, and the
+//! Shaders written as WGSL files: the scene model of one, and the
 //! reflection that reads its interface.
 //!
 //! A shader file defines
