@@ -86,6 +86,9 @@ const FLAG_WARM_UP: u32 = 1u;
 // This pass overwrites the image even if its pass_index is not 0: the first
 // pass of a sample split (`render --passes A..B`) that starts at A > 0.
 const FLAG_FRESH: u32 = 2u;
+// This dispatch shades the last chunk of light samples: the shade stage
+// writes the pixel's colour to the image (earlier chunks sum in `radiance`).
+const FLAG_LAST_CHUNK: u32 = 4u;
 
 // Farther than anything in a scene; used as "no hit yet" and as the length
 // of shadow rays towards directional lights.

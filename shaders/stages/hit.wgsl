@@ -1,7 +1,12 @@
 // Stage 1, camera rays and closest hit: one invocation per pixel of the
-// band; writes the pixel's hit record (and, when asked for, its AOVs).
+// band; writes the pixel's hit record and its resolved material
+// (stages/resolve.wgsl), the background where the ray hit nothing (the shade
+// stage writes the other pixels), and, when asked for, the AOVs.
 
 @group(0) @binding(14) var hit_records_out: texture_storage_2d<rgba32uint, write>;
+
+// Linear RGB; alpha is 1 where a primary ray hit something, else 0.
+@group(0) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
 
 @compute @workgroup_size(8, 8, 1)
 fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -29,11 +34,18 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             textureStore(hit_records_out, record_texel(slot, 2u), vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
             textureStore(hit_records_out, record_texel(slot, 3u), vec4<u32>(bitcast<vec3<u32>>(-ray.dir), 0u));
             textureStore(hit_records_out, record_texel(slot, 4u), vec4<u32>(0u));
+            resolve_material(slot, hit);
         } else {
             textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(0u, 0u, 0u, KIND_NONE));
+            var value = vec4<f32>(globals.background, 0.0);
+            let at = pixel - push.slot_base;
+            if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {
+                value += image[at];
+            }
+            image[at] = value;
         }
         if HAS_AOV && push.pass_index == 0u {
-            write_aov(pixel, hit);
+            write_aov(pixel - push.slot_base, hit);
         }
         primary = 1u;
     }

@@ -1,4 +1,4 @@
-// Stage 3b, shade: one pipeline per shader file. The host compiles this
+// Stage 3, shade: one pipeline per shader file. The host compiles this
 // file with shading/interface.wgsl, the shader file, and the parameter
 // loader it generates from the file's `struct Params` (src/render/shade.rs):
 //   fn penumbra_load_params(at: u32) -> Params
@@ -7,7 +7,9 @@
 // Every name here starts with `penumbra_`, so no shader file can collide
 // with the engine. The stage traces nothing: it sums the shader's ambient
 // term of every light and its `shade` of every queued light sample that
-// reached the point (the shadow stage zeroed the others).
+// reached the point (the shadow stage zeroed the others), and writes the
+// colour to the image with the last chunk of samples (earlier chunks sum in
+// the colour sums); the hit stage writes the pixels that hit nothing.
 //
 // penumbra_PushConstants mirrors PushConstants (render.wgsl); the layout
 // test in src/render/layout/mod.rs checks it against the host's.
@@ -35,15 +37,19 @@ struct penumbra_PushConstants {
 @group(0) @binding(14) var penumbra_hit_records: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(15) var penumbra_queue: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(16) var penumbra_resolved: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(7) var<storage, read_write> penumbra_image: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> penumbra_radiance: array<vec4<f32>>;
 @group(0) @binding(18) var penumbra_params: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(19) var penumbra_light_colours: texture_storage_2d<rgba32uint, read>;
 var<immediate> penumbra_push: penumbra_PushConstants;
 
-// render.wgsl's FLAG_WARM_UP, stages/records.wgsl's KIND_NONE, RECORD_TEXELS
+// render.wgsl's FLAG_WARM_UP, FLAG_FRESH and FLAG_LAST_CHUNK,
+// stages/records.wgsl's KIND_NONE, RECORD_TEXELS
 // and QUEUE_TEXELS, and texels.wgsl's TEXEL_ROW (checked against them by
 // src/render/layout/mod.rs).
 const penumbra_FLAG_WARM_UP: u32 = 1u;
+const penumbra_FLAG_FRESH: u32 = 2u;
+const penumbra_FLAG_LAST_CHUNK: u32 = 4u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
 const penumbra_QUEUE_TEXELS: u32 = 2u;
@@ -102,5 +108,14 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             colour += shade(s, l, p);
         }
     }
-    penumbra_radiance[slot] = vec4<f32>(colour, 1.0);
+    if (push.flags & penumbra_FLAG_LAST_CHUNK) == 0u {
+        penumbra_radiance[slot] = vec4<f32>(colour, 1.0);
+        return;
+    }
+    let at = px.y * push.size.x + px.x - push.slot_base;
+    var value = vec4<f32>(colour, 1.0);
+    if push.pass_index > 0u && (push.flags & penumbra_FLAG_FRESH) == 0u {
+        value += penumbra_image[at];
+    }
+    penumbra_image[at] = value;
 }

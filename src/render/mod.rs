@@ -2,6 +2,7 @@
 //! stages of a frame ([`stages`]) specialised to the scene's features, runs
 //! them tile by tile ([`tiles`]) and reads the image back.
 
+pub mod bands;
 pub mod compile;
 pub mod layout;
 pub mod quantised_bvh;
@@ -24,11 +25,12 @@ use crate::vulkan::{
     BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
     DeviceSelector, Dispatch, Resource, TexelImage, VulkanError,
 };
+use bands::ImageBands;
 pub use compile::{
     Accel, CompileError, KernelOptions, Sampler, Settings, ShaderSource, ShadowOffset, StageKernel,
     TriangleTest,
 };
-use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_WARM_UP};
+use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_LAST_CHUNK, FLAG_WARM_UP};
 pub use reload::ReloadReport;
 use shade::{Materials, ProgramFile};
 use stages::{Binding, Stage};
@@ -260,6 +262,10 @@ struct StageBuffers {
     queue: TexelImage,
     resolved: TexelImage,
     radiance: Buffer,
+    /// The image of the last whole render with these buffers (made when
+    /// one needs it): a reused frame skips the hit stage, which writes the
+    /// pixels that hit nothing, so they must still hold that render's.
+    image: Option<Buffer>,
     holds: Option<HitKey>,
 }
 
@@ -463,7 +469,7 @@ impl Renderer {
         let spirv = assembled.compile_entry(&kernel, stage.entry_point())?;
         let naga = t0.elapsed();
         let (pipeline, creation, driver) = self.build_pipeline(&spirv, stage.entry_point())?;
-        if stage != Stage::Gather && stage != Stage::Trace {
+        if stage != Stage::Trace {
             self.traversal_generation += 1;
         }
         self.stage_pipelines.insert(
@@ -575,22 +581,27 @@ impl Renderer {
                 BufferUsage::Storage,
                 px * tiles::RADIANCE_BYTES,
             )?,
+            image: None,
             holds: None,
         });
         Ok(self.stage_buffers.len() - 1)
     }
 
-    /// Checks the image against the device's limits, naming the scene field.
-    fn check_size(&self, width: u32, height: u32) -> Result<(), RenderError> {
+    /// Checks the image against the device's limits and
+    /// [`bands::MAX_IMAGE_BYTES`], naming the scene field. An image larger
+    /// than one buffer binding is no limit: it is kept in bands of rows
+    /// ([`ImageBands`]).
+    /// Without `whole`, only the workgroup counts (parts check their rows).
+    fn check_size(&self, width: u32, height: u32, whole: bool) -> Result<(), RenderError> {
         let limits = self.context.limits();
-        let bytes = width as u64 * height as u64 * 16;
-        if bytes > limits.max_storage_buffer_range {
+        let bytes = width as u64 * height as u64 * bands::PIXEL_BYTES;
+        if whole && bytes > bands::MAX_IMAGE_BYTES {
             return Err(RenderError::Scene {
                 field: "camera.width/camera.height".into(),
                 message: format!(
-                    "{width}x{height} pixels need a {:.1} MiB image buffer, more than this device's maxStorageBufferRange of {:.1} MiB",
+                    "{width}x{height} pixels need a {:.0} MiB image, more than the {} MiB one render holds: render it in tiles (render --tile I/N, then penumbra merge)",
                     bytes as f64 / 1048576.0,
-                    limits.max_storage_buffer_range as f64 / 1048576.0
+                    bands::MAX_IMAGE_BYTES >> 20
                 ),
             });
         }
@@ -619,6 +630,14 @@ impl Renderer {
         Ok(())
     }
 
+    /// [`Renderer::upload`] for the parts of a split render
+    /// ([`Renderer::render_part`]): the image may be larger than one render
+    /// holds ([`bands::MAX_IMAGE_BYTES`]), since each part renders only its
+    /// rows.
+    pub fn upload_for_parts(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
+        self.upload_inner(scene, false)
+    }
+
     /// Lays out a validated scene, builds its BVH and uploads it. The result
     /// can be rendered many times, at any size up to the scene's own, and
     /// survives shader edits (see [`Renderer::render_uploaded`]).
@@ -626,20 +645,10 @@ impl Renderer {
         self.upload_inner(scene, true)
     }
 
-    /// [`Renderer::upload`] for [`Renderer::render_part`] only: no image
-    /// buffer of the full size is made or required (each part makes one for
-    /// its own rows), so the image may be larger than the device's
-    /// `maxStorageBufferRange` allows for one buffer.
-    pub fn upload_for_parts(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
-        self.upload_inner(scene, false)
-    }
-
-    fn upload_inner(&mut self, scene: &Scene, image: bool) -> Result<UploadedScene, RenderError> {
+    fn upload_inner(&mut self, scene: &Scene, whole: bool) -> Result<UploadedScene, RenderError> {
         self.reuse_hits = false;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        // Parts check their own band's buffer (render_part).
-        self.check_size(width, if image { height } else { 1 })?;
-        self.check_size(1, height)?;
+        self.check_size(width, height, whole)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let materials = Materials::new(&scene.shaders, &self.shaders, false)?;
@@ -654,10 +663,6 @@ impl Renderer {
         let ctx = &self.context;
         let storage = |label: &str, bytes: &[u8]| {
             ctx.create_buffer_with_data(label, BufferUsage::Storage, bytes)
-        };
-        let image_bytes = match image {
-            true => width as u64 * height as u64 * 16,
-            false => 16,
         };
         // The kernel reads the first light before it knows whether there is
         // one (shaders/lights.wgsl, first_light): upload at least one.
@@ -685,7 +690,8 @@ impl Renderer {
             )?),
             b(storage("lights", bytemuck::cast_slice(lights))?),
             b(storage("shaders", bytemuck::cast_slice(&gpu.shaders))?),
-            b(ctx.create_buffer("image", BufferUsage::Storage, image_bytes)?),
+            // The image: a placeholder, replaced per render (ImageBands).
+            b(ctx.create_buffer("image", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("counters", BufferUsage::Storage, 16)?),
             texels("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
             b(storage(
@@ -919,52 +925,32 @@ impl Renderer {
             options: key_kernel,
         };
         let compiled = self.frame_pipelines(scene, stage_kernel, false)?;
-        let ctx = &self.context;
-        let aov_buffer = if with_aovs {
-            let bytes = width as u64 * height as u64 * std::mem::size_of::<layout::Aov>() as u64;
-            Some(ctx.create_buffer("AOVs", BufferUsage::Storage, bytes)?)
-        } else {
-            None
-        };
-        // A part renders into a buffer of its own rows (push.slot_base).
-        let band_buffer = match part {
-            Some(p) => {
-                let bytes = width as u64 * (p.rows.end - p.rows.start) as u64 * 16;
-                let max = ctx.limits().max_storage_buffer_range;
-                if bytes > max {
-                    return Err(RenderError::Scene {
-                        field: "--tile".into(),
-                        message: format!(
-                            "rows {}..{} of {width} pixels need a {:.1} MiB buffer, more than this device's maxStorageBufferRange of {:.1} MiB: use more tiles",
-                            p.rows.start,
-                            p.rows.end,
-                            bytes as f64 / 1048576.0,
-                            max as f64 / 1048576.0
-                        ),
-                    });
-                }
-                Some(ctx.create_buffer("image band", BufferUsage::Storage, bytes)?)
-            }
-            None => None,
-        };
-        let full = width as u64 * height as u64 * 16;
-        if part.is_none() && scene.bound[Binding::Image as usize].buffer()?.size() < full {
-            return Err(RenderError::Scene {
-                field: "camera.width/camera.height".into(),
-                message: "the scene was uploaded for parts only (Renderer::upload_for_parts): render it with render_part".into(),
-            });
-        }
         let rows = part.map_or(0..height, |p| p.rows.clone());
         let (first_pass, end_pass) =
             part.map_or((0, sampling.spp), |p| (p.passes.start, p.passes.end));
-        let plan = TilePlan::new(
+        let mut plan = TilePlan::new(
             [width, rows.end - rows.start],
             scene.light_samples,
             self.stage_memory,
             self.context.limits().max_storage_buffer_range,
         );
+        let bytes = width as u64 * (rows.end - rows.start) as u64 * bands::PIXEL_BYTES;
+        if bytes > bands::MAX_IMAGE_BYTES {
+            return Err(RenderError::Scene {
+                field: if part.is_some() { "--tile" } else { "camera.width/camera.height" }.into(),
+                message: format!(
+                    "rows {}..{} of {width} pixels need a {:.0} MiB image, more than the {} MiB one render holds: use more tiles",
+                    rows.start,
+                    rows.end,
+                    bytes as f64 / 1048576.0,
+                    bands::MAX_IMAGE_BYTES >> 20
+                ),
+            });
+        }
+        let max_buffer = self.context.limits().max_storage_buffer_range;
+        let bands = ImageBands::plan(width, rows.clone(), with_aovs, &mut plan, max_buffer)?;
         let kept = self.stage_buffers_for(plan)?;
-        let tiles = plan.tiles(width, rows.clone());
+        let tiles = bands.tiles(&plan);
         let chunks = plan.chunks();
         // Hit records survive a shading edit: with one tile and one chunk,
         // the buffers still hold this exact frame's hits and visibility.
@@ -978,25 +964,53 @@ impl Renderer {
             seed: sampling.seed,
             kernel: stage_kernel,
         };
+        // A render whose image fits one binding writes it into its stage
+        // buffers' image; parts and larger images into bands made for them.
+        let whole = part.is_none() && bands.rows.len() == 1;
+        // The whole render's image: taken out of the stage buffers for the
+        // render, put back when it completes (an error drops it, and its
+        // frame with it).
+        let mut whole_image = None;
+        if whole {
+            let bytes = width as u64 * height as u64 * bands::PIXEL_BYTES;
+            let kept = &mut self.stage_buffers[kept];
+            whole_image = kept.image.take().filter(|b| b.size() >= bytes);
+            if whole_image.is_none() {
+                kept.holds = None;
+                whole_image = Some(self.context.create_buffer(
+                    "image",
+                    BufferUsage::Storage,
+                    bytes,
+                )?);
+            }
+        }
         let reuse = self.reuse_hits
             && reusable
+            && whole
             && self.stage_buffers[kept].holds.as_ref() == Some(&key(first_pass));
-        let holds = (reusable).then(|| key(first_pass));
+        let holds = reusable.then(|| key(first_pass));
         // Until this render completes, the buffers hold no whole frame.
         self.stage_buffers[kept].holds = None;
         let ctx = &self.context;
+        let mut band_buffers = bands.buffers(ctx, whole_image)?;
         let buffers = &self.stage_buffers[kept];
         let mut refs: Vec<_> = scene.bound.iter().map(Bound::resource).collect();
-        if let Some(b) = &aov_buffer {
-            refs[Binding::Aovs as usize] = b.into();
-        }
-        if let Some(b) = &band_buffer {
-            refs[Binding::Image as usize] = b.into();
-        }
         refs[Binding::HitRecords as usize] = (&buffers.hits).into();
         refs[Binding::Queue as usize] = (&buffers.queue).into();
         refs[Binding::Resolved as usize] = (&buffers.resolved).into();
         refs[Binding::Radiance as usize] = (&buffers.radiance).into();
+        // Each band's bindings: its image rows and AOVs.
+        let band_refs: Vec<Vec<Resource>> = band_buffers
+            .iter()
+            .map(|(image, aovs)| {
+                let mut r = refs.clone();
+                r[Binding::Image as usize] = image.into();
+                if let Some(b) = aovs {
+                    r[Binding::Aovs as usize] = b.into();
+                }
+                r
+            })
+            .collect();
         let stage = |s: Stage| &self.stage_pipelines[&(s, stage_kernel)].pipeline;
         let programs: Vec<&ComputePipeline> = scene
             .materials
@@ -1026,11 +1040,16 @@ impl Renderer {
                 pass_index: first_pass + passes,
                 seed: sampling.seed,
                 flags: if passes == 0 { FLAG_FRESH } else { 0 },
-                slot_base: rows.start * width,
                 light_count,
                 ..Zeroable::zeroed()
             };
             for &(origin, size) in &tiles {
+                let band = bands.band_of(origin[1]);
+                let refs = &band_refs[band];
+                let base = PushConstants {
+                    slot_base: bands.rows[band].start * width,
+                    ..base
+                };
                 // Bands of rows within the tile, to ask `cancel` between.
                 let band_rows = match cancel {
                     Some(_) => BAND_ROWS,
@@ -1053,16 +1072,20 @@ impl Renderer {
                     let mut pushes: Vec<(usize, &ComputePipeline, PushConstants)> = Vec::new();
                     if !reuse {
                         pushes.push((0, stage(Stage::Hit), band));
-                        pushes.push((1, stage(Stage::Resolve), band));
                     }
-                    for &(first, count) in &chunks {
+                    for (c, &(first, count)) in chunks.iter().enumerate() {
+                        let last = match c + 1 == chunks.len() {
+                            true => FLAG_LAST_CHUNK,
+                            false => 0,
+                        };
                         let chunk = PushConstants {
                             sample_first: first,
                             sample_count: count,
+                            flags: band.flags | last,
                             ..band
                         };
                         if !reuse {
-                            pushes.push((2, stage(Stage::Shadow), chunk));
+                            pushes.push((1, stage(Stage::Shadow), chunk));
                         }
                         for (i, p) in programs.iter().enumerate() {
                             pushes.push((
@@ -1075,12 +1098,11 @@ impl Renderer {
                             ));
                         }
                     }
-                    pushes.push((3, stage(Stage::Gather), band));
                     let chain: Vec<Dispatch> = pushes
                         .iter()
                         .map(|(_, pipeline, push)| Dispatch {
                             pipeline,
-                            resources: &refs,
+                            resources: refs,
                             push_constants: bytemuck::bytes_of(push),
                             groups,
                         })
@@ -1117,30 +1139,32 @@ impl Renderer {
             (compiled.naga, compiled.pipeline, compiled.driver);
 
         let t1 = Instant::now();
-        let image_bytes = match &band_buffer {
-            Some(b) => ctx.read_buffer(b)?,
-            None => ctx.read_buffer(scene.bound[Binding::Image as usize].buffer()?)?,
-        };
-        let n = width as usize * height as usize;
-        let mut pixels: Vec<[f32; 4]> = match part {
-            None => bytemuck::pod_collect_to_vec(&image_bytes[..n * 16]),
-            Some(_) => {
-                let n = width as usize * (rows.end - rows.start) as usize;
-                bytemuck::pod_collect_to_vec(&image_bytes[..n * 16])
+        let n = width as usize * (rows.end - rows.start) as usize;
+        let mut pixels: Vec<[f32; 4]> = Vec::with_capacity(n);
+        let mut aov_bytes = Vec::new();
+        for ((image, aovs), band) in band_buffers.iter().zip(&bands.rows) {
+            let texels = width as usize * (band.end - band.start) as usize;
+            let bytes = ctx.read_buffer(image)?;
+            pixels.extend(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(
+                &bytes[..texels * 16],
+            ));
+            if let Some(b) = aovs {
+                let size = texels * std::mem::size_of::<layout::Aov>();
+                aov_bytes.extend_from_slice(&ctx.read_buffer(b)?[..size]);
             }
-        };
+        }
         if passes > 1 && part.is_none() {
             let inv = 1.0 / passes as f32;
             for p in &mut pixels {
                 *p = p.map(|c| c * inv);
             }
         }
-        let aovs = match &aov_buffer {
-            Some(b) => Some(Aovs::from_gpu(&ctx.read_buffer(b)?, n, scene)),
-            None => None,
-        };
+        let aovs = with_aovs.then(|| Aovs::from_gpu(&aov_bytes, n, scene));
         let readback = t1.elapsed();
         ctx.check_validation()?;
+        if whole {
+            self.stage_buffers[kept].image = Some(band_buffers.swap_remove(0).0);
+        }
         self.stage_buffers[kept].holds = holds;
 
         let stage_times = match self.profile_stages {

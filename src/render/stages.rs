@@ -4,11 +4,11 @@
 //!
 //! A frame runs as a chain of compute pipelines, after the wavefront design of
 //! pbrt-v4's GPU integrator (Laine, Karras and Aila, "Megakernels Considered
-//! Harmful", HPG 2013): camera rays and closest hit write hit records,
-//! material resolve picks each hit's leaf shader, the shadow stage samples
-//! the lights and traces each sample's shadow ray, one shade pipeline per
-//! shader file sums the contributions of the samples that reach the point,
-//! and gather writes the image and the AOVs.
+//! Harmful", HPG 2013): camera rays and closest hit write hit records and
+//! resolve each hit's material (checkers pick the leaf shader), the shadow
+//! stage samples the lights and traces each sample's shadow ray, and one
+//! shade pipeline per shader file sums the contributions of the samples that
+//! reach the point and writes the image.
 //! Each stage is compiled from only the files it needs, so an edit
 //! recompiles only the stages that include the edited file.
 
@@ -47,7 +47,6 @@ shader_files![
     "stages/hit.wgsl",
     "stages/resolve.wgsl",
     "stages/shadow.wgsl",
-    "stages/gather.wgsl",
     "stages/shade.wgsl",
     "shading/interface.wgsl",
     "shading/phong.wgsl",
@@ -84,31 +83,27 @@ const TRAVERSAL: &[&str] = &[
 /// The engine's stages (the shade stage is per shader file: [`super::shade`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Stage {
-    /// Camera rays and closest hit: writes the hit records.
+    /// Camera rays and closest hit: writes the hit records, each hit's
+    /// resolved material (checkers select the leaf shader), the background
+    /// of the pixels that hit nothing, and the AOVs.
     Hit,
-    /// Material resolve: checkers select the leaf shader of each hit.
-    Resolve,
     /// Light sampling and the any-hit traversal of each sample's shadow
     /// ray: queues the samples that reach the point.
     Shadow,
-    /// Writes (or adds) each pixel's colour to the image; writes the AOVs.
-    Gather,
     /// Ray queries (tests and tools): the closest hit of given rays.
     Trace,
 }
 
 impl Stage {
-    /// The stages of a frame, in order (the shade pipelines run between
-    /// [`Stage::Shadow`] and [`Stage::Gather`]).
-    pub const FRAME: [Stage; 4] = [Stage::Hit, Stage::Resolve, Stage::Shadow, Stage::Gather];
+    /// The engine stages of a frame, in order (the shade pipelines run
+    /// after them, once per chunk of light samples).
+    pub const FRAME: [Stage; 2] = [Stage::Hit, Stage::Shadow];
 
     /// The stage's name in reload reports.
     pub fn name(self) -> &'static str {
         match self {
             Stage::Hit => "hit",
-            Stage::Resolve => "resolve",
             Stage::Shadow => "shadow",
-            Stage::Gather => "gather",
             Stage::Trace => "trace",
         }
     }
@@ -117,9 +112,7 @@ impl Stage {
     pub fn entry_point(self) -> &'static str {
         match self {
             Stage::Hit => "hit_stage",
-            Stage::Resolve => "resolve_stage",
             Stage::Shadow => "shadow_stage",
-            Stage::Gather => "gather_stage",
             Stage::Trace => "trace",
         }
     }
@@ -127,14 +120,15 @@ impl Stage {
     /// The files the stage is compiled from, in order.
     pub fn files(self) -> Vec<&'static str> {
         let own: &[&str] = match self {
-            Stage::Hit => &["sampling.wgsl", "aov.wgsl", "stages/hit.wgsl"],
-            Stage::Resolve => &[
+            Stage::Hit => &[
+                "sampling.wgsl",
+                "aov.wgsl",
                 "shading/shader.wgsl",
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
+                "stages/hit.wgsl",
             ],
             Stage::Shadow => &["lights.wgsl", "sampling.wgsl", "stages/shadow.wgsl"],
-            Stage::Gather => &["stages/gather.wgsl"],
             Stage::Trace => &["queries.wgsl"],
         };
         let traversal = matches!(self, Stage::Hit | Stage::Shadow | Stage::Trace);
@@ -185,7 +179,7 @@ pub enum Binding {
     Lights,
     /// The shader table (leaves and checkers).
     ShaderNodes,
-    /// The accumulated image.
+    /// The accumulated image (or the band of it that a dispatch writes).
     Image,
     /// Ray counters.
     Counters,

@@ -78,6 +78,10 @@ pub const FLAG_WARM_UP: u32 = 1;
 /// `PushConstants::flags` bit: this pass overwrites the image whatever its
 /// `pass_index` (the first pass of a sample split that does not start at 0).
 pub const FLAG_FRESH: u32 = 2;
+/// `PushConstants::flags` bit: the shade stage's dispatch of the last chunk
+/// of light samples, which writes the image (earlier chunks sum in the
+/// colour sums).
+pub const FLAG_LAST_CHUNK: u32 = 4;
 
 /// A scene laid out for the GPU.
 #[derive(Clone, Debug, Default)]
@@ -341,6 +345,8 @@ mod tests {
         };
         for name in [
             "FLAG_WARM_UP",
+            "FLAG_FRESH",
+            "FLAG_LAST_CHUNK",
             "KIND_NONE",
             "RECORD_TEXELS",
             "QUEUE_TEXELS",
@@ -371,6 +377,7 @@ mod tests {
             ("NO_NORMALS", NO_NORMALS),
             ("FLAG_WARM_UP", FLAG_WARM_UP),
             ("FLAG_FRESH", FLAG_FRESH),
+            ("FLAG_LAST_CHUNK", FLAG_LAST_CHUNK),
             ("SHADER_LEAF", SHADER_LEAF),
             ("SHADER_CHECKER", SHADER_CHECKER),
             ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
