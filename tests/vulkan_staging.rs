@@ -3,7 +3,9 @@
 //! map) is exercised on lavapipe too. Its own test binary, and one test, because the variable is
 //! process-global and read when a context opens.
 
+#[path = "gpu/support.rs"]
 mod support;
+#[path = "gpu/vulkan_kernel.rs"]
 mod vulkan_kernel;
 use vulkan_kernel as common;
 
@@ -56,7 +58,7 @@ fn staging_path_round_trip_dispatch_and_renders() {
 
     // Whole renders through staging: the showcase matches the mapped render
     // exactly, and the benchmark scene matches Embree's independent counts
-    // (tests/render_bunny.rs).
+    // (tests/gpu/bunny.rs).
     let staged = Renderer::new(&options)
         .expect("a Vulkan device")
         .render(&showcase)

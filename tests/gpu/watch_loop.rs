@@ -2,11 +2,11 @@
 //! and a small scene: shader edits, broken and fixed shaders, scene edits,
 //! editors that save by rename or by delete and re-create, bursts of saves.
 
-mod watch_support;
+use crate::watch_support;
 
 use std::time::Duration;
 
-use watch_support::*;
+use crate::watch_support::*;
 
 #[test]
 fn shader_and_scene_edits_reload_and_errors_keep_the_last_image() {

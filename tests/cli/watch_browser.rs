@@ -4,8 +4,6 @@
 //! shader edit must change the image on the page, a broken shader must show
 //! its error over the last good image, and the fix must clear it.
 
-mod watch_support;
-
 use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
 use std::os::fd::FromRawFd;
@@ -14,8 +12,8 @@ use std::process::{Command, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
+use crate::watch_support::*;
 use serde_json::{json, Value};
-use watch_support::*;
 
 /// Headless Chromium with the DevTools protocol on fds 3 (in) and 4 (out).
 struct Browser {

@@ -6,7 +6,7 @@
 //! The sub-shaders are ambient-only (k_a times an ambient-only light of
 //! I_a = 1), so each cell colour is exact and the comparison can be tight.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use penumbra::render::Image;

@@ -5,7 +5,7 @@
 //! storage buffer, fail with a message naming the buffer and the limit
 //! instead of crashing the driver.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use penumbra::render::{Accel, KernelOptions, RenderError};

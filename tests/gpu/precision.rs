@@ -4,7 +4,7 @@
 //! before anything is rounded to f32), and small or distant spheres must land
 //! on the pixels an f64 projection predicts.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use penumbra::render::Image;
@@ -212,8 +212,8 @@ fn small_spheres_far_away_and_extreme_fields_of_view() {
 /// The GPU image and depth against the f64 reference for one scene: image
 /// channels within 2e-3 on all but 0.5 % of the pixels (f32 against f64 can
 /// tip a pixel at a silhouette or shadow edge; the tolerance is argued in
-/// tests/reference.rs), and every depth where both saw the same object
-/// within the bound derived in tests/aov.rs: 64 · 2⁻²⁴ / |n·d|.
+/// tests/gpu/reference.rs), and every depth where both saw the same object
+/// within the bound derived in tests/gpu/aov.rs: 64 · 2⁻²⁴ / |n·d|.
 fn check_against_reference(scene: &Scene, what: &str) {
     use penumbra::render::{KernelOptions, Sampling};
     let (gpu, gpu_aov) = {

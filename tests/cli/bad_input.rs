@@ -76,6 +76,18 @@ fn penumbra(args: &[OsString], env: &[(&str, &str)]) -> Output {
     cmd.output().expect("run penumbra")
 }
 
+/// The arguments `render SCENE -o OUTPUT` plus `extra`.
+fn render_to(scene: &Path, output: &Path, extra: &[&str]) -> Vec<OsString> {
+    let mut args: Vec<OsString> = vec!["render".into(), scene.into(), "-o".into(), output.into()];
+    args.extend(extra.iter().map(OsString::from));
+    args
+}
+
+/// The arguments `render SCENE -o OUT_DIR/out.png` plus `extra`.
+fn render_args(scene: &Path, out_dir: &Path, extra: &[&str]) -> Vec<OsString> {
+    render_to(scene, &out_dir.join("out.png"), extra)
+}
+
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
@@ -113,7 +125,7 @@ fn assert_fails(
 ) -> String {
     let stderr = text(&out.stderr);
     let stdout = text(&out.stdout);
-    // Shown with `cargo test --test cli_bad_input -- --nocapture`, to read every message.
+    // Shown with `cargo test --test cli bad_input:: -- --nocapture`, to read every message.
     eprintln!("{stderr}");
     let ctx = format!(
         "status: {:?}\nstderr:\n{stderr}\nstdout:\n{stdout}",
@@ -172,10 +184,7 @@ fn assert_fails(
 fn fails_with(name: &str, contents: impl AsRef<[u8]>, extra: &[&str], must: &[&str]) -> String {
     let scene = scene_file(name, contents);
     let out_dir = tempfile::tempdir().expect("tempdir");
-    let mut args: Vec<OsString> = vec!["render".into(), scene.path.clone().into(), "-o".into()];
-    args.push(out_dir.path().join("out.png").into());
-    args.extend(extra.iter().map(OsString::from));
-    let out = penumbra(&args, &[]);
+    let out = penumbra(&render_args(&scene.path, out_dir.path(), extra), &[]);
     let path = scene.path.display().to_string();
     let mut all = vec![path.as_str()];
     all.extend_from_slice(must);
@@ -252,68 +261,118 @@ fn valid_base_scene_renders() {
     );
 }
 
+// ------------------------------------------------------------- the tables
+//
+// Each row of these tables is one `#[test]`, named by its first column, so
+// that every case is run and reported on its own.
+
+/// Rows `name: |v| change => "field", [must...];`: the base scene with the
+/// change fails in the form `file: field: message`, naming the scene file,
+/// the field and every string of `must` ([`json_fails`]).
+macro_rules! field_cases {
+    ($($name:ident: |$v:ident| $change:expr => $field:literal, [$($must:expr),+ $(,)?];)+) => {$(
+        #[test]
+        fn $name() {
+            let s = mutated(|$v| {
+                $change;
+            });
+            json_fails(&s, $field, &[$($must),+]);
+        }
+    )+};
+}
+
+/// Rows `name: (file name, contents) => [must...];`: a scene file with these
+/// contents fails naming its path and every string of `must` ([`fails_with`]).
+macro_rules! file_cases {
+    ($($name:ident: ($file:literal, $contents:expr) => [$($must:expr),+ $(,)?];)+) => {$(
+        #[test]
+        fn $name() {
+            fails_with($file, $contents, &[], &[$($must),+]);
+        }
+    )+};
+}
+
+/// Rows `name: [args...] => shape, [must...];`: the valid base scene rendered
+/// with these extra arguments fails in `shape`, naming every string of
+/// `must` ([`cli_fails`]).
+macro_rules! cli_cases {
+    ($($name:ident: [$($arg:expr),+] => $shape:ident, [$($must:expr),+ $(,)?];)+) => {$(
+        #[test]
+        fn $name() {
+            cli_fails(&[$($arg),+], Shape::$shape, &[$($must),+]);
+        }
+    )+};
+}
+
+/// Rows `name: "path" => [must...];`: the valid base scene rendered to
+/// `path` (relative to a fresh output directory) fails naming the output
+/// path and every string of `must` ([`output_fails`]).
+macro_rules! output_cases {
+    ($($name:ident: $target:literal => [$($must:expr),+ $(,)?];)+) => {$(
+        #[test]
+        fn $name() {
+            output_fails($target, &[$($must),+]);
+        }
+    )+};
+}
+
+/// Rows `name: file, params, raw => "field", shape, [must...];`: the base
+/// scene whose sphere uses the WGSL shader `file` with `params` (and `raw`
+/// text replacements, see [`wgsl_scene`]) fails in `shape`, naming the scene
+/// file, the field and every string of `must` ([`wgsl_fails`]).
+macro_rules! wgsl_cases {
+    ($($name:ident: $file:literal, $params:expr, $raw:expr => $field:literal, $shape:ident, [$($must:expr),+ $(,)?];)+) => {$(
+        #[test]
+        fn $name() {
+            wgsl_fails($file, $params, $raw, $field, Shape::$shape, &[$($must),+]);
+        }
+    )+};
+}
+
+/// Renders `render <valid scene> -o <fresh dir>/target` and asserts a clean
+/// one-line failure naming the output path and every string of `must`.
+#[track_caller]
+fn output_fails(target: &str, must: &[&str]) -> String {
+    let scene = scene_file("scene.json", mutated(|_| {}));
+    let out_dir = tempfile::tempdir().unwrap();
+    let target = out_dir.path().join(target);
+    let t = target.display().to_string();
+    let mut all = vec![t.as_str()];
+    all.extend_from_slice(must);
+    assert_fails(
+        &penumbra(&render_to(&scene.path, &target, &[]), &[]),
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &all,
+    )
+}
+
 // ------------------------------------------------------- structure / types
 
-#[test]
-fn unknown_top_level_field() {
-    let s = mutated(|v| v["fog"] = json!(0.5));
-    fails_with("scene.json", s, &[], &["unknown field `fog`"]);
+file_cases! {
+    unknown_top_level_field: ("scene.json", mutated(|v| v["fog"] = json!(0.5)))
+        => ["unknown field `fog`"];
+    unknown_field_in_object: ("scene.json", mutated(|v| v["objects"][1]["colour"] = json!([1, 0, 0])))
+        => ["objects[1]", "unknown field `colour`"];
 }
 
-#[test]
-fn unknown_field_in_object() {
-    let s = mutated(|v| v["objects"][1]["colour"] = json!([1, 0, 0]));
-    fails_with(
-        "scene.json",
-        s,
-        &[],
-        &["objects[1]", "unknown field `colour`"],
-    );
+field_cases! {
+    missing_camera_width: |v| v["camera"].as_object_mut().unwrap().remove("width")
+        => "camera", ["missing field `width`"];
+    sphere_without_radius: |v| v["objects"][1].as_object_mut().unwrap().remove("radius")
+        => "objects[1]", ["`radius`", "sphere"];
+    radius_is_a_string: |v| v["objects"][1]["radius"] = json!("1")
+        => "objects[1].radius", ["invalid type"];
+    position_with_two_numbers: |v| v["camera"]["position"] = json!([0, 1])
+        => "camera.position", ["invalid length 2"];
+    sphere_with_normal: |v| v["objects"][1]["normal"] = json!([0, 1, 0])
+        => "objects[1].normal", ["not a field of a sphere"];
 }
 
-#[test]
-fn missing_camera_width() {
-    let s = mutated(|v| {
-        v["camera"].as_object_mut().unwrap().remove("width");
-    });
-    json_fails(&s, "camera", &["missing field `width`"]);
-}
-
-#[test]
-fn sphere_without_radius() {
-    let s = mutated(|v| {
-        v["objects"][1].as_object_mut().unwrap().remove("radius");
-    });
-    json_fails(&s, "objects[1]", &["`radius`", "sphere"]);
-}
-
-#[test]
-fn radius_is_a_string() {
-    let s = mutated(|v| v["objects"][1]["radius"] = json!("1"));
-    json_fails(&s, "objects[1].radius", &["invalid type"]);
-}
-
-#[test]
-fn position_with_two_numbers() {
-    let s = mutated(|v| v["camera"]["position"] = json!([0, 1]));
-    json_fails(&s, "camera.position", &["invalid length 2"]);
-}
-
-#[test]
-fn sphere_with_normal() {
-    let s = mutated(|v| v["objects"][1]["normal"] = json!([0, 1, 0]));
-    json_fails(&s, "objects[1].normal", &["not a field of a sphere"]);
-}
-
-#[test]
-fn unknown_object_type() {
-    let s = mutated(|v| v["objects"][1]["type"] = json!("cube"));
-    fails_with(
-        "scene.json",
-        &s,
-        &[],
-        &["objects[1]", "unknown variant `cube`"],
-    );
+file_cases! {
+    unknown_object_type: ("scene.json", mutated(|v| v["objects"][1]["type"] = json!("cube")))
+        => ["objects[1]", "unknown variant `cube`"];
 }
 
 #[test]
@@ -326,39 +385,18 @@ fn non_finite_number() {
 
 // ------------------------------------------------------------------ values
 
-#[test]
-fn negative_radius() {
-    let s = mutated(|v| v["objects"][1]["radius"] = json!(-1.0));
-    json_fails(&s, "objects[1].radius", &["must be positive", "-1"]);
-}
-
-#[test]
-fn zero_radius() {
-    let s = mutated(|v| v["objects"][1]["radius"] = json!(0));
-    json_fails(&s, "objects[1].radius", &["must be positive"]);
-}
-
-#[test]
-fn vertex_beyond_f32() {
+field_cases! {
+    negative_radius: |v| v["objects"][1]["radius"] = json!(-1.0)
+        => "objects[1].radius", ["must be positive", "-1"];
+    zero_radius: |v| v["objects"][1]["radius"] = json!(0)
+        => "objects[1].radius", ["must be positive"];
     // 1e39 is a finite f64 but no f32: the kernel could not even store it.
-    let s = mutated(|v| v["objects"][2]["vertices"][2] = json!([0, 1e39, 0]));
-    json_fails(
-        &s,
-        "objects[2].vertices[2]",
-        &["must lie within ±1e18", "f32"],
-    );
-}
-
-#[test]
-fn sphere_radius_beyond_the_coordinate_limit() {
-    let s = mutated(|v| v["objects"][1]["radius"] = json!(1e30));
-    json_fails(&s, "objects[1].radius", &["at most 1e18", "1e30"]);
-}
-
-#[test]
-fn light_position_beyond_the_coordinate_limit() {
-    let s = mutated(|v| v["lights"][1]["position"] = json!([2, 1e20, 2]));
-    json_fails(&s, "lights[1].position", &["must lie within ±1e18"]);
+    vertex_beyond_f32: |v| v["objects"][2]["vertices"][2] = json!([0, 1e39, 0])
+        => "objects[2].vertices[2]", ["must lie within ±1e18", "f32"];
+    sphere_radius_beyond_the_coordinate_limit: |v| v["objects"][1]["radius"] = json!(1e30)
+        => "objects[1].radius", ["at most 1e18", "1e30"];
+    light_position_beyond_the_coordinate_limit: |v| v["lights"][1]["position"] = json!([2, 1e20, 2])
+        => "lights[1].position", ["must lie within ±1e18"];
 }
 
 #[test]
@@ -378,34 +416,17 @@ fn mesh_scaled_beyond_the_coordinate_limit() {
     );
 }
 
-#[test]
-fn zero_plane_normal() {
-    let s = mutated(|v| v["objects"][0]["normal"] = json!([0, 0, 0]));
-    json_fails(&s, "objects[0].normal", &["non-zero"]);
-}
-
-#[test]
-fn zero_light_direction() {
-    let s = mutated(|v| v["lights"][0]["direction"] = json!([0, 0, 0]));
-    json_fails(&s, "lights[0].direction", &["non-zero"]);
-}
-
-#[test]
-fn camera_up_parallel_to_view() {
-    let s = mutated(|v| v["camera"]["up"] = json!([0, 0.5, 5]));
-    json_fails(&s, "camera.up", &["parallel"]);
-}
-
-#[test]
-fn look_at_equals_position() {
-    let s = mutated(|v| v["camera"]["look_at"] = json!([0, 1, 5]));
-    json_fails(&s, "camera.look_at", &["camera.position"]);
-}
-
-#[test]
-fn look_at_and_yaw() {
-    let s = mutated(|v| v["camera"]["yaw"] = json!(10));
-    json_fails(&s, "camera", &["look_at", "yaw"]);
+field_cases! {
+    zero_plane_normal: |v| v["objects"][0]["normal"] = json!([0, 0, 0])
+        => "objects[0].normal", ["non-zero"];
+    zero_light_direction: |v| v["lights"][0]["direction"] = json!([0, 0, 0])
+        => "lights[0].direction", ["non-zero"];
+    camera_up_parallel_to_view: |v| v["camera"]["up"] = json!([0, 0.5, 5])
+        => "camera.up", ["parallel"];
+    look_at_equals_position: |v| v["camera"]["look_at"] = json!([0, 1, 5])
+        => "camera.look_at", ["camera.position"];
+    look_at_and_yaw: |v| v["camera"]["yaw"] = json!(10)
+        => "camera", ["look_at", "yaw"];
 }
 
 #[test]
@@ -416,16 +437,11 @@ fn fov_out_of_range() {
     }
 }
 
-#[test]
-fn scene_width_zero() {
-    let s = mutated(|v| v["camera"]["width"] = json!(0));
-    json_fails(&s, "camera.width", &["1..=16384", "got 0"]);
-}
-
-#[test]
-fn scene_width_above_maximum() {
-    let s = mutated(|v| v["camera"]["width"] = json!(20000));
-    json_fails(&s, "camera.width", &["1..=16384", "got 20000"]);
+field_cases! {
+    scene_width_zero: |v| v["camera"]["width"] = json!(0)
+        => "camera.width", ["1..=16384", "got 0"];
+    scene_width_above_maximum: |v| v["camera"]["width"] = json!(20000)
+        => "camera.width", ["1..=16384", "got 20000"];
 }
 
 #[test]
@@ -463,34 +479,15 @@ fn image_larger_than_device_storage_limit() {
 fn cli_fails(extra: &[&str], shape: Shape, must: &[&str]) -> String {
     let scene = scene_file("scene.json", mutated(|_| {}));
     let out_dir = tempfile::tempdir().unwrap();
-    let mut args: Vec<OsString> = vec!["render".into(), scene.path.clone().into(), "-o".into()];
-    args.push(out_dir.path().join("out.png").into());
-    args.extend(extra.iter().map(OsString::from));
+    let args = render_args(&scene.path, out_dir.path(), extra);
     assert_fails(&penumbra(&args, &[]), out_dir.path(), &[], shape, must)
 }
 
-#[test]
-fn cli_width_zero() {
-    cli_fails(&["--width", "0"], Shape::Clap, &["--width"]);
-}
-
-#[test]
-fn cli_width_not_a_number() {
-    cli_fails(&["--width", "abc"], Shape::Clap, &["--width", "abc"]);
-}
-
-#[test]
-fn cli_width_above_maximum() {
-    cli_fails(&["--width", "20000"], Shape::Clap, &["--width", "20000"]);
-}
-
-#[test]
-fn cli_unknown_device() {
-    cli_fails(
-        &["--device", "nosuchdevice"],
-        Shape::OneLine,
-        &["nosuchdevice", "available: 0: "],
-    );
+cli_cases! {
+    cli_width_zero: ["--width", "0"] => Clap, ["--width"];
+    cli_width_not_a_number: ["--width", "abc"] => Clap, ["--width", "abc"];
+    cli_width_above_maximum: ["--width", "20000"] => Clap, ["--width", "20000"];
+    cli_unknown_device: ["--device", "nosuchdevice"] => OneLine, ["nosuchdevice", "available: 0: "];
 }
 
 #[test]
@@ -507,16 +504,11 @@ fn cli_shader_directory_missing() {
 
 // ----------------------------------------------------------------- shaders
 
-#[test]
-fn object_refers_to_unknown_shader() {
-    let s = mutated(|v| v["objects"][1]["shader"] = json!("nope"));
-    json_fails(&s, "objects[1].shader", &["no shader named \"nope\""]);
-}
-
-#[test]
-fn checker_refers_to_unknown_shader() {
-    let s = mutated(|v| v["shaders"]["floor"]["odd"] = json!("nope"));
-    json_fails(&s, "shaders.floor.odd", &["no shader named \"nope\""]);
+field_cases! {
+    object_refers_to_unknown_shader: |v| v["objects"][1]["shader"] = json!("nope")
+        => "objects[1].shader", ["no shader named \"nope\""];
+    checker_refers_to_unknown_shader: |v| v["shaders"]["floor"]["odd"] = json!("nope")
+        => "shaders.floor.odd", ["no shader named \"nope\""];
 }
 
 #[test]
@@ -534,28 +526,15 @@ fn checker_cycle() {
     );
 }
 
-#[test]
-fn checker_size_zero() {
-    let s = mutated(|v| v["shaders"]["floor"]["size"] = json!(0));
-    json_fails(&s, "shaders.floor.size", &["must be positive"]);
-}
-
-#[test]
-fn negative_colour_component() {
-    let s = mutated(|v| v["shaders"]["red"]["diffuse"] = json!([0.8, -0.1, 0.1]));
-    json_fails(&s, "shaders.red.diffuse", &["non-negative"]);
-}
-
-#[test]
-fn negative_background_component() {
-    let s = mutated(|v| v["background"] = json!([0, 0, -1]));
-    json_fails(&s, "background", &["non-negative"]);
-}
-
-#[test]
-fn negative_shininess() {
-    let s = mutated(|v| v["shaders"]["red"]["shininess"] = json!(-2));
-    json_fails(&s, "shaders.red.shininess", &[">= 0"]);
+field_cases! {
+    checker_size_zero: |v| v["shaders"]["floor"]["size"] = json!(0)
+        => "shaders.floor.size", ["must be positive"];
+    negative_colour_component: |v| v["shaders"]["red"]["diffuse"] = json!([0.8, -0.1, 0.1])
+        => "shaders.red.diffuse", ["non-negative"];
+    negative_background_component: |v| v["background"] = json!([0, 0, -1])
+        => "background", ["non-negative"];
+    negative_shininess: |v| v["shaders"]["red"]["shininess"] = json!(-2)
+        => "shaders.red.shininess", [">= 0"];
 }
 
 // ------------------------------------------------------------------ lights
@@ -568,35 +547,23 @@ fn spot_inner_not_below_outer() {
     }
 }
 
-#[test]
-fn spot_outer_above_90() {
-    let s = mutated(|v| v["lights"][2]["outer_angle"] = json!(100));
-    json_fails(&s, "lights[2].outer_angle", &["90"]);
-}
-
-#[test]
-fn negative_intensity() {
-    let s = mutated(|v| v["lights"][1]["intensity"] = json!(-1));
-    json_fails(&s, "lights[1].intensity", &[">= 0"]);
-}
-
-#[test]
-fn negative_light_colour() {
-    let s = mutated(|v| v["lights"][0]["ambient"] = json!([-0.1, 0, 0]));
-    json_fails(&s, "lights[0].ambient", &["non-negative"]);
+field_cases! {
+    spot_outer_above_90: |v| v["lights"][2]["outer_angle"] = json!(100)
+        => "lights[2].outer_angle", ["90"];
+    negative_intensity: |v| v["lights"][1]["intensity"] = json!(-1)
+        => "lights[1].intensity", [">= 0"];
+    negative_light_colour: |v| v["lights"][0]["ambient"] = json!([-0.1, 0, 0])
+        => "lights[0].ambient", ["non-negative"];
 }
 
 // ------------------------------------------------------------------- files
 
-#[test]
-fn mesh_file_missing() {
-    let s = mutated(|v| {
-        v["objects"]
-            .as_array_mut()
-            .unwrap()
-            .push(json!({"type": "mesh", "file": "missing.glb"}));
-    });
-    json_fails(&s, "objects[3].file", &["missing.glb"]);
+field_cases! {
+    mesh_file_missing: |v| v["objects"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"type": "mesh", "file": "missing.glb"}))
+        => "objects[3].file", ["missing.glb"];
 }
 
 #[test]
@@ -604,12 +571,7 @@ fn scene_file_does_not_exist() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("nothing.json");
     let out_dir = tempfile::tempdir().unwrap();
-    let args: Vec<OsString> = vec![
-        "render".into(),
-        path.clone().into(),
-        "-o".into(),
-        out_dir.path().join("out.png").into(),
-    ];
+    let args = render_args(&path, out_dir.path(), &[]);
     let p = path.display().to_string();
     assert_fails(
         &penumbra(&args, &[]),
@@ -620,81 +582,19 @@ fn scene_file_does_not_exist() {
     );
 }
 
-#[test]
-fn scene_file_is_garbage_bytes() {
-    fails_with(
-        "scene.json",
-        [0xffu8, 0xfe, 0x00, 0x13, 0x80, 0x7b, 0x22],
-        &[],
-        &["cannot read scene"],
-    );
+file_cases! {
+    scene_file_is_garbage_bytes: ("scene.json", [0xffu8, 0xfe, 0x00, 0x13, 0x80, 0x7b, 0x22])
+        => ["cannot read scene"];
+    scene_file_is_not_json: ("scene.json", "camera = { width = 64 }\n")
+        => ["expected value", "line 1"];
+    scene_file_is_empty: ("scene.json", "") => ["EOF"];
+    scene_file_with_unsupported_extension: ("scene.txt", mutated(|_| {}))
+        => ["unknown scene format", ".json"];
 }
 
-#[test]
-fn scene_file_is_not_json() {
-    fails_with(
-        "scene.json",
-        "camera = { width = 64 }\n",
-        &[],
-        &["expected value", "line 1"],
-    );
-}
-
-#[test]
-fn scene_file_is_empty() {
-    fails_with("scene.json", "", &[], &["EOF"]);
-}
-
-#[test]
-fn scene_file_with_unsupported_extension() {
-    fails_with(
-        "scene.txt",
-        mutated(|_| {}),
-        &[],
-        &["unknown scene format", ".json"],
-    );
-}
-
-#[test]
-fn output_directory_does_not_exist() {
-    let scene = scene_file("scene.json", mutated(|_| {}));
-    let out_dir = tempfile::tempdir().unwrap();
-    let target = out_dir.path().join("no").join("such").join("out.png");
-    let args: Vec<OsString> = vec![
-        "render".into(),
-        scene.path.clone().into(),
-        "-o".into(),
-        target.clone().into(),
-    ];
-    let t = target.display().to_string();
-    assert_fails(
-        &penumbra(&args, &[]),
-        out_dir.path(),
-        &[],
-        Shape::OneLine,
-        &[&t, "cannot write", "does not exist"],
-    );
-}
-
-#[test]
-fn output_with_unsupported_extension() {
-    let scene = scene_file("scene.json", mutated(|_| {}));
-    let out_dir = tempfile::tempdir().unwrap();
-    let target = out_dir.path().join("out.jpg");
-    let args: Vec<OsString> = vec![
-        "render".into(),
-        scene.path.clone().into(),
-        "-o".into(),
-        target.clone().into(),
-    ];
-    let t = target.display().to_string();
-    assert_fails(
-        &penumbra(&args, &[]),
-        out_dir.path(),
-        &[],
-        Shape::OneLine,
-        &[&t, "unknown output format", ".png"],
-    );
+output_cases! {
+    output_directory_does_not_exist: "no/such/out.png" => ["cannot write", "does not exist"];
+    output_with_unsupported_extension: "out.jpg" => ["unknown output format", ".png"];
 }
 
 #[test]
@@ -709,12 +609,7 @@ fn output_is_a_directory() {
     ] {
         let target = out_dir.path().join(name);
         std::fs::create_dir(&target).unwrap();
-        let args: Vec<OsString> = vec![
-            "render".into(),
-            scene.path.clone().into(),
-            "-o".into(),
-            target.clone().into(),
-        ];
+        let args = render_to(&scene.path, &target, &[]);
         let t = target.display().to_string();
         assert_fails(
             &penumbra(&args, &[]),
@@ -743,12 +638,7 @@ const NO_DRIVER: [(&str, &str); 2] = [
 fn no_vulkan_driver_render() {
     let scene = scene_file("scene.json", mutated(|_| {}));
     let out_dir = tempfile::tempdir().unwrap();
-    let args: Vec<OsString> = vec![
-        "render".into(),
-        scene.path.clone().into(),
-        "-o".into(),
-        out_dir.path().join("out.png").into(),
-    ];
+    let args = render_args(&scene.path, out_dir.path(), &[]);
     let e = assert_fails(
         &penumbra(&args, &NO_DRIVER),
         out_dir.path(),
@@ -807,13 +697,6 @@ fn trapped(name: &str) -> Trapped {
     // SAFETY: a valid NUL-terminated path.
     assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) }, 0, "mkfifo");
     Trapped { _dir: dir, scene }
-}
-
-fn render_args(scene: &Path, out_dir: &Path, extra: &[&str]) -> Vec<OsString> {
-    let mut args: Vec<OsString> = vec!["render".into(), scene.into(), "-o".into()];
-    args.push(out_dir.join("out.png").into());
-    args.extend(extra.iter().map(OsString::from));
-    args
 }
 
 #[test]
@@ -1061,34 +944,15 @@ fn wgsl_fails(
     assert_fails(&out, out_dir.path(), &[], shape, &all)
 }
 
-#[test]
-fn wgsl_shader_without_shade() {
-    wgsl_fails(
-        "no_shade.wgsl",
-        None,
-        &[],
-        "shaders.toon.file",
-        Shape::OneLine,
-        &[
-            "no_shade.wgsl: ",
-            "no `fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32>`",
-        ],
-    );
-}
-
-#[test]
-fn wgsl_shade_with_the_wrong_return_type() {
-    wgsl_fails(
-        "shade_returns_f32.wgsl",
-        None,
-        &[],
-        "shaders.toon.file",
-        Shape::Source,
-        &[
-            "shade_returns_f32.wgsl:2:",
-            "`shade` returns f32, it must be `fn shade(Surface, LightSample, Params) -> vec3<f32>`",
-        ],
-    );
+wgsl_cases! {
+    wgsl_shader_without_shade: "no_shade.wgsl", None, &[] => "shaders.toon.file", OneLine, [
+        "no_shade.wgsl: ",
+        "no `fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32>`",
+    ];
+    wgsl_shade_with_the_wrong_return_type: "shade_returns_f32.wgsl", None, &[] => "shaders.toon.file", Source, [
+        "shade_returns_f32.wgsl:2:",
+        "`shade` returns f32, it must be `fn shade(Surface, LightSample, Params) -> vec3<f32>`",
+    ];
 }
 
 #[test]
@@ -1106,120 +970,48 @@ fn wgsl_syntax_error_points_into_the_users_file() {
     assert_eq!(lines[2], "   |             ^", "{stderr}");
 }
 
-#[test]
-fn wgsl_file_missing() {
-    wgsl_fails(
+wgsl_cases! {
+    wgsl_file_missing: "missing.wgsl", None, &[] => "shaders.toon.file", OneLine, [
+        "no such file",
         "missing.wgsl",
-        None,
-        &[],
-        "shaders.toon.file",
-        Shape::OneLine,
-        &["no such file", "missing.wgsl"],
-    );
-}
-
-#[test]
-fn wgsl_params_field_missing() {
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| {
-            p.as_object_mut().unwrap().remove("bands");
-        }),
-        &[],
-        "shaders.toon.params.bands",
-        Shape::OneLine,
-        &["missing: Params field `bands: u32` of toon.wgsl has no value"],
-    );
+    ];
+    wgsl_params_field_missing: "toon.wgsl", toon_params(|p| {
+        p.as_object_mut().unwrap().remove("bands");
+    }), &[] => "shaders.toon.params.bands", OneLine, [
+        "missing: Params field `bands: u32` of toon.wgsl has no value",
+    ];
     // Without `params` at all, the first field is missing.
-    wgsl_fails(
-        "toon.wgsl",
-        None,
-        &[],
-        "shaders.toon.params.base",
-        Shape::OneLine,
-        &["missing: Params field `base: vec3<f32>` of toon.wgsl has no value"],
-    );
-}
-
-#[test]
-fn wgsl_params_extra_field() {
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["extra"] = json!(1)),
-        &[],
-        "shaders.toon.params.extra",
-        Shape::OneLine,
-        &["toon.wgsl's Params has no field `extra`"],
-    );
+    wgsl_params_left_out_miss_the_first_field: "toon.wgsl", None, &[] => "shaders.toon.params.base", OneLine, [
+        "missing: Params field `base: vec3<f32>` of toon.wgsl has no value",
+    ];
+    wgsl_params_extra_field: "toon.wgsl", toon_params(|p| p["extra"] = json!(1)), &[]
+        => "shaders.toon.params.extra", OneLine, ["toon.wgsl's Params has no field `extra`"];
     // A file without Params takes no params.
-    wgsl_fails(
-        "plain.wgsl",
-        Some(json!({"gain": 1})),
-        &[],
-        "shaders.toon.params.gain",
-        Shape::OneLine,
-        &["plain.wgsl's Params has no field `gain`"],
-    );
-}
-
-#[test]
-fn wgsl_params_of_the_wrong_type() {
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["gain"] = json!("bright")),
-        &[],
-        "shaders.toon.params.gain",
-        Shape::OneLine,
-        &["Params field `gain` of toon.wgsl is f32, expected a number, got a string"],
-    );
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["base"] = json!([0.9, 0.3])),
-        &[],
-        "shaders.toon.params.base",
-        Shape::OneLine,
-        &["Params field `base` of toon.wgsl is vec3<f32>, expected an array of 3 numbers, got 2"],
-    );
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["bands"] = json!(1.5)),
-        &[],
-        "shaders.toon.params.bands",
-        Shape::OneLine,
-        &["Params field `bands` of toon.wgsl is u32, expected an integer in 0..=4294967295, got 1.5"],
-    );
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["bands"] = json!(-1)),
-        &[],
-        "shaders.toon.params.bands",
-        Shape::OneLine,
-        &["is u32, expected an integer", "got -1"],
-    );
-}
-
-#[test]
-fn wgsl_params_not_finite() {
+    wgsl_params_for_a_file_without_params: "plain.wgsl", Some(json!({"gain": 1})), &[]
+        => "shaders.toon.params.gain", OneLine, ["plain.wgsl's Params has no field `gain`"];
+    wgsl_params_of_the_wrong_type: "toon.wgsl", toon_params(|p| p["gain"] = json!("bright")), &[]
+        => "shaders.toon.params.gain", OneLine, [
+        "Params field `gain` of toon.wgsl is f32, expected a number, got a string",
+    ];
+    wgsl_params_vec3_of_two_numbers: "toon.wgsl", toon_params(|p| p["base"] = json!([0.9, 0.3])), &[]
+        => "shaders.toon.params.base", OneLine, [
+        "Params field `base` of toon.wgsl is vec3<f32>, expected an array of 3 numbers, got 2",
+    ];
+    wgsl_params_u32_of_a_fraction: "toon.wgsl", toon_params(|p| p["bands"] = json!(1.5)), &[]
+        => "shaders.toon.params.bands", OneLine, [
+        "Params field `bands` of toon.wgsl is u32, expected an integer in 0..=4294967295, got 1.5",
+    ];
+    wgsl_params_u32_of_a_negative_number: "toon.wgsl", toon_params(|p| p["bands"] = json!(-1)), &[]
+        => "shaders.toon.params.bands", OneLine, ["is u32, expected an integer", "got -1"];
     // Beyond f64: serde_json refuses the number while parsing, at its path.
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["gain"] = json!("HUGE")),
-        &[("\"HUGE\"", "1e999")],
-        "shaders.toon.params.gain",
-        Shape::OneLine,
-        &["number out of range"],
-    );
+    wgsl_params_not_finite: "toon.wgsl", toon_params(|p| p["gain"] = json!("HUGE")), &[("\"HUGE\"", "1e999")]
+        => "shaders.toon.params.gain", OneLine, ["number out of range"];
     // Beyond f32: finite as JSON, infinite as the shader's f32.
-    wgsl_fails(
-        "toon.wgsl",
-        toon_params(|p| p["base"] = json!([0.9, 1e39, 0.2])),
-        &[],
-        "shaders.toon.params.base",
-        Shape::OneLine,
-        &["Params field `base` of toon.wgsl is vec3<f32>, expected a finite number, got 1e39"],
-    );
+    wgsl_params_beyond_f32: "toon.wgsl", toon_params(|p| p["base"] = json!([0.9, 1e39, 0.2])), &[]
+        => "shaders.toon.params.base", OneLine, [
+        "Params field `base` of toon.wgsl is vec3<f32>, expected a finite number, got 1e39",
+    ];
 }
-
 #[test]
 fn reference_refuses_a_wgsl_shader() {
     let (_dir, scene) = wgsl_scene("toon.wgsl", toon_params(|_| {}), &[]);

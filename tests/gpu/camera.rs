@@ -4,7 +4,7 @@
 //! yaw/pitch/roll, field of view or orthographic window, image size); the
 //! library's `Camera::project` is only cross-checked against it.
 
-mod support;
+use crate::support;
 
 use glam::{DMat3, DVec3};
 use penumbra::scene::Scene;

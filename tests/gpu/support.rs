@@ -9,11 +9,15 @@ use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::{Frame, Renderer, RendererOptions};
 use penumbra::scene::Scene;
 
-/// One renderer per test binary: opening the device and compiling kernels
-/// costs far more than the small test renders.
+/// One renderer per test binary (tests/gpu: every module's tests): opening
+/// the device and compiling kernels costs far more than the small test
+/// renders. Tests that switch its kernel or stage memory switch them back
+/// before they release the lock; if a test panicked while holding it, the
+/// next caller gets the renderer back with the defaults restored, so that
+/// one failure does not leak its settings into the other modules' tests.
 pub fn renderer() -> std::sync::MutexGuard<'static, Renderer> {
     static R: OnceLock<Mutex<Renderer>> = OnceLock::new();
-    R.get_or_init(|| {
+    let r = R.get_or_init(|| {
         let opts = RendererOptions {
             validation: std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1"),
             ..Default::default()
@@ -21,9 +25,14 @@ pub fn renderer() -> std::sync::MutexGuard<'static, Renderer> {
         Mutex::new(Renderer::new(&opts).unwrap_or_else(|e| {
             panic!("GPU tests need a Vulkan device (run tools/setup.sh to install lavapipe): {e}")
         }))
+    });
+    r.lock().unwrap_or_else(|poisoned| {
+        r.clear_poison();
+        let mut guard = poisoned.into_inner();
+        guard.set_kernel(RendererOptions::default().kernel);
+        guard.set_stage_memory(penumbra::render::tiles::DEFAULT_STAGE_MEMORY);
+        guard
     })
-    .lock()
-    .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// Renders a validated scene.

@@ -4,7 +4,7 @@
 //! bunny, 708,558 the ground) and 96,703 or 96,704 of the lit points are
 //! blocked from the light.
 
-mod support;
+use crate::support;
 
 use penumbra::render::{Accel, KernelOptions, ShadowOffset, TriangleTest};
 

@@ -1,7 +1,7 @@
 //! Shaders as WGSL files (issue 13) through the JSON loader: what a valid
 //! `wgsl` shader loads as (fields, values, packed words), files shared by
 //! several shaders, checkers of WGSL shaders, the path guard, and the scene
-//! model's own checks. The command line's errors are in `cli_bad_input.rs`.
+//! model's own checks. The command line's errors are in `tests/cli/bad_input.rs`.
 
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,7 @@
 //! Arbitrary output variables (depth, normal, uv, ids) against values
 //! computed here in f64, and their OpenEXR channels.
 
-mod support;
+use crate::support;
 
 use glam::{DMat3, DVec3, Vec3};
 use penumbra::output::{write_exr_with_aovs, AovSet};

@@ -1,9 +1,7 @@
 //! `penumbra watch` as a user runs it: the real binary on a temporary copy
 //! of the shaders and a scene, edited from outside.
 
-mod watch_support;
-
-use watch_support::*;
+use crate::watch_support::*;
 
 #[test]
 fn the_binary_reloads_reports_errors_and_recovers() {

@@ -1,8 +1,7 @@
 //! Integration tests of the Vulkan backend. They need a Vulkan device (lavapipe in CI) and fail,
 //! rather than skip, when none is found.
 
-mod vulkan_kernel;
-use vulkan_kernel as common;
+use crate::vulkan_kernel as common;
 
 use penumbra::vulkan::*;
 

@@ -2,7 +2,7 @@
 //! computed here: Lambert's polygon form factor, the penumbra width of a
 //! straight edge, and determinism of the sample pattern.
 
-mod support;
+use crate::support;
 
 use std::f64::consts::PI;
 

@@ -1,7 +1,7 @@
 //! Numerically hard cases, ray by ray through the GPU's own intersection code
 //! (Renderer::trace).
 
-mod support;
+use crate::support;
 
 use glam::{DMat3, DVec3, Vec3};
 use penumbra::render::{HitKind, KernelOptions, TraceHit, TraceRay, TriangleTest};

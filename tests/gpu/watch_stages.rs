@@ -4,12 +4,10 @@
 //! hit records, a broken user shader keeps the last image and the next good
 //! save recovers, and a `Params` change reloads the scene to check its JSON.
 
-mod watch_support;
-
 use std::path::{Path, PathBuf};
 
+use crate::watch_support::*;
 use penumbra::render::ShaderSource;
-use watch_support::*;
 
 /// A user shader: `base` times the cosine of the light.
 const TOON: &str = "// A user shader for the watch tests.

@@ -4,7 +4,7 @@
 //! set by `Renderer::set_stage_memory`, and the tiled image is the same, bit
 //! for bit, as the image rendered in fewer, larger tiles.
 
-mod support;
+use crate::support;
 
 use penumbra::render::tiles::{self, TilePlan};
 use penumbra::render::{Frame, Renderer};

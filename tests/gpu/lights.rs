@@ -8,7 +8,7 @@
 //! cone's linear ramp multiplies errors of cos θ by 1/(cos inner − cos outer)
 //! ≈ 8 here, and squaring by 2 more: still below 1e-5.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 

@@ -20,7 +20,7 @@
 //!   formula error (a missing factor, a wrong vector, a camera-absolute
 //!   position) changes colours by far more.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

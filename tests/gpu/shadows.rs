@@ -9,7 +9,7 @@
 //! shadowed (or wrongly lit) pixel differs by k_d·I_d·l·n, which the scenes
 //! keep well above 1e-3 (grazing light: sin 1.5° · 0.8 ≈ 0.02).
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use penumbra::render::Image;

@@ -3,7 +3,7 @@
 //! and compare with values computed here: the IEC 61966-2-1 sRGB curve for
 //! PNG, the exact linear floats for EXR. Also the atomic-write guarantees.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

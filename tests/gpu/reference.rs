@@ -30,7 +30,7 @@
 //! to the neighbouring triangle that shifts where the ray meets it by ~10⁻³,
 //! past its edge; the exact answer (and the reference) is "in shadow".
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -267,7 +267,7 @@ fn bunny_matches_the_gpu() {
 }
 
 /// The benchmark scene at 1024×1024 against Embree's figures (see
-/// tests/render_bunny.rs, which separates ground and bunny the same way):
+/// tests/gpu/bunny.rs, which separates ground and bunny the same way):
 /// 858,452 primary rays hit (149,894 the bunny), and 31,540 ground points are
 /// blocked from the light. This checks the reference without our GPU.
 #[test]

@@ -12,7 +12,7 @@
 //! missing factor, ambient scaled by the intensity...) changes colours by
 //! far more than 1e-3.
 
-mod support;
+use crate::support;
 
 use glam::{DMat3, DVec3, Vec3};
 use penumbra::scene::{

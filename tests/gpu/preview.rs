@@ -1,7 +1,7 @@
 //! Uploaded scenes: rendered again and at preview sizes, they give exactly
 //! what a fresh render at that size gives.
 
-mod support;
+use crate::support;
 
 #[test]
 fn preview_equals_a_render_at_that_size_and_reuse_is_exact() {

@@ -1,0 +1,9 @@
+//! The tests of library code that needs no Vulkan device and starts no
+//! process: the BRDFs' known truths and the glTF and WGSL-shader loaders.
+//! One test binary, one module per concept.
+//!
+//! One concept: `cargo test --test cpu gltf_loader::` (docs/tests.md).
+
+mod brdf;
+mod gltf_loader;
+mod wgsl_shaders;

@@ -1,0 +1,34 @@
+//! The tests that drive the library's Vulkan renderer in this process: one
+//! test binary, one module per concept. They share one device and one kernel
+//! cache ([`support::renderer`], opened by the first test that asks for it);
+//! a test that switches the shared renderer's kernel or stage memory holds
+//! its lock until it has switched them back. They need a Vulkan device
+//! (lavapipe in CI) and fail loudly when there is none; they never skip.
+//!
+//! One concept: `cargo test --test gpu shading::` (docs/tests.md).
+
+mod support;
+mod vulkan_kernel;
+#[path = "../watch_support/mod.rs"]
+mod watch_support;
+
+mod aov;
+mod bands;
+mod area_lights;
+mod bunny;
+mod camera;
+mod checker;
+mod hard_cases;
+mod large_scenes;
+mod lights;
+mod output;
+mod precision;
+mod preview;
+mod reference;
+mod shading;
+mod shadows;
+mod tiles;
+mod user_shaders;
+mod vulkan;
+mod watch_loop;
+mod watch_stages;
