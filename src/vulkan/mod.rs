@@ -107,3 +107,20 @@ impl VulkanError {
 pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> VulkanError {
     move |result| VulkanError::vk(what, result)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vk_errors_read_as_ash_formats_the_code() {
+        let r = ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY;
+        let e = VulkanError::vk("vkAllocateMemory", r);
+        assert_eq!(e.to_string(), format!("vkAllocateMemory failed: {r}"));
+        let VulkanError::Vk { result, .. } = e else {
+            panic!("not a Vk error")
+        };
+        assert_eq!(result.code, -2);
+        assert_eq!(result.name, "ERROR_OUT_OF_DEVICE_MEMORY");
+    }
+}
