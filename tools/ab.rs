@@ -1,6 +1,6 @@
 //! A/B timing of two shader trees on one scene: is my edit faster?
 //!
-//! `cargo run --release --example ab -- SCENE --b my_shaders/` renders the
+//! `cargo run --release -p penumbra-tools --bin ab -- SCENE --b my_shaders/` renders the
 //! scene with the built-in shaders (A, or `--a DIR`) and with `DIR` (B),
 //! interleaved A B A B … after a warm-up frame of each, and prints both
 //! medians and the median of the per-pair ratios B/A with its range. Pairs,
@@ -13,9 +13,12 @@ use std::time::Instant;
 use anyhow::Context as _;
 use clap::Parser;
 
+use common::device::DeviceArg;
+use common::load::worker_cpu_ns;
+use common::ms;
+use common::stats::median_min_max;
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::{Renderer, RendererOptions, ShaderSource};
-use penumbra::vulkan::DeviceSelector;
 
 #[derive(Parser)]
 #[command(name = "ab", about = "Interleaved A/B frame times of two shader trees")]
@@ -31,9 +34,8 @@ struct Args {
     /// Measured pairs.
     #[arg(long, default_value_t = 7)]
     pairs: usize,
-    /// Vulkan device: an index from `penumbra devices`, or part of its name.
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    device: DeviceArg,
     /// Compare the CPU time the driver's threads spend per frame (every
     /// thread but the main one, from /proc/self/task/*/schedstat) instead of
     /// wall time: time-sharing the cores with other processes inflates wall
@@ -42,47 +44,10 @@ struct Args {
     cpu_time: bool,
 }
 
-/// Nanoseconds on the CPU of every thread of this process but the main one
-/// (lavapipe's workers; the main thread only submits and waits).
-fn worker_cpu_ns() -> anyhow::Result<u64> {
-    let main = std::process::id().to_string();
-    let mut total = 0;
-    for task in std::fs::read_dir("/proc/self/task")? {
-        let task = task?;
-        if task.file_name().to_str() == Some(main.as_str()) {
-            continue;
-        }
-        // A thread that ended meanwhile has no schedstat any more.
-        let Ok(stat) = std::fs::read_to_string(task.path().join("schedstat")) else {
-            continue;
-        };
-        let on_cpu = stat.split_whitespace().next().unwrap_or("0");
-        total += on_cpu.parse::<u64>().context("schedstat")?;
-    }
-    Ok(total)
-}
-
-fn median_min_max(v: &[f64]) -> (f64, f64, f64) {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    let median = if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        (s[n / 2 - 1] + s[n / 2]) / 2.0
-    };
-    (median, s[0], s[n - 1])
-}
-
 fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     anyhow::ensure!(args.pairs > 0, "--pairs: must be at least 1");
-    let device = args
-        .device
-        .as_deref()
-        .map(|d| d.parse::<DeviceSelector>())
-        .transpose()
-        .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
+    let device = args.device.selector()?;
     let scene = loaders::load_scene(&args.scene, &LoadOptions::default())?.scene;
     let source = |d: &Option<PathBuf>| match d {
         Some(p) => ShaderSource::Directory(p.clone()),
@@ -147,8 +112,4 @@ fn main() -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-fn ms(d: std::time::Duration) -> f64 {
-    d.as_secs_f64() * 1e3
 }

@@ -30,9 +30,17 @@ build() { # commit -> path of its ab binary
     fi
     # One target directory for all scratch builds (dependencies build once);
     # each commit's binary is copied out of it.
+    # Commits since the tools became the workspace member penumbra-tools
+    # (tools/Cargo.toml) build `ab` as its binary; older ones as the root
+    # package's example.
     if [ ! -x "$scratch/ab-$sha" ]; then
-        (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build -q --release --example ab >&2)
-        cp "$scratch/target/release/examples/ab" "$scratch/ab-$sha"
+        if [ -f "$dir/tools/Cargo.toml" ]; then
+            (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build -q --release -p penumbra-tools --bin ab >&2)
+            cp "$scratch/target/release/ab" "$scratch/ab-$sha"
+        else
+            (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build -q --release --example ab >&2)
+            cp "$scratch/target/release/examples/ab" "$scratch/ab-$sha"
+        fi
     fi
     echo "$scratch/ab-$sha"
 }

@@ -16,12 +16,8 @@
 //!    render of the final files.
 //!
 //! ```sh
-//! cargo run --release --example bench_reload -- docs/reload.md
+//! cargo run --release -p penumbra-tools --bin bench_reload -- docs/reload.md
 //! ```
-
-#[path = "bench/machine.rs"]
-#[allow(dead_code)]
-mod machine;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -29,6 +25,9 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use common::load::rss_kib;
+use common::ms;
+use common::stats::{median, median_min_max};
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::{Renderer, RendererOptions, ShaderSource};
 use penumbra::watch::{self, Event, Reload, WatchOptions};
@@ -80,17 +79,6 @@ fn scaled(src: &str, factor: &str) -> String {
     )
 }
 
-fn rss_kib() -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmRSS:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
-        })
-        .unwrap_or(0)
-}
-
 fn next_reload(rx: &Receiver<Event>, timeout: Duration) -> Option<Reload> {
     let end = Instant::now() + timeout;
     loop {
@@ -100,20 +88,6 @@ fn next_reload(rx: &Receiver<Event>, timeout: Duration) -> Option<Reload> {
             Err(RecvTimeoutError::Timeout) => return None,
             Err(RecvTimeoutError::Disconnected) => panic!("the watch loop ended"),
         }
-    }
-}
-
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
     }
 }
 
@@ -240,12 +214,10 @@ fn measure_edits(lp: &Loop, path: &Path, src: &str, stamp: u128, tag: u64) -> La
         println!("{}", r.line);
         undo.push(ms(r.stages[0].written_at - t_save));
     }
-    let undo_median = median(&mut undo);
+    let undo_median = median(&undo);
     let col = |k: usize| -> (f64, f64, f64) {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
-        let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        (median(&mut v), lo, hi)
+        let v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
+        median_min_max(&v)
     };
     let names = [
         "**save → preview on disk**",
@@ -294,7 +266,7 @@ fn describe(l: &Latency) -> String {
 
 /// `/proc/cpuinfo`'s first processor and the CPUs available.
 fn machine_line() -> String {
-    let cpu = machine::CpuInfo::read();
+    let cpu = common::machine::CpuInfo::read();
     format!(
         "{}; {} CPU cores available to this process",
         cpu.describe(),
@@ -306,7 +278,7 @@ fn machine_line() -> String {
 
 fn main() -> anyhow::Result<()> {
     let report_path: Option<PathBuf> = std::env::args().nth(1).map(PathBuf::from);
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = &common::repo_root();
     let tmp = tempfile::tempdir()?;
     let shaders = tmp.path().join("shaders");
     copy_dir(&root.join("shaders"), &shaders)?;
@@ -486,7 +458,7 @@ fn main() -> anyhow::Result<()> {
     };
     let md = format!(
         "# Hot reload: measurements\n\n\
-         Regenerate with `cargo run --release --example bench_reload -- docs/reload.md` \
+         Regenerate with `cargo run --release -p penumbra-tools --bin bench_reload -- docs/reload.md` \
          (source: `tools/bench_reload.rs`).\n\n\
          - Machine: {}\n\
          - Device: {device}\n\

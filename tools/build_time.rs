@@ -5,18 +5,16 @@
 //! two phases timed apart: the host tree, and the primitive references and
 //! quantised records encoded from it.
 //!
-//!   cargo run --release --example build_time -- [BUILDS]
+//!   cargo run --release -p penumbra-tools --bin build_time -- [BUILDS]
 //!
 //! To compare two commits, run it at each in turn a few times (the second
 //! core of a small machine comes and goes: compare runs taken alternately).
 
-#[allow(dead_code)]
-#[path = "bench/meshes.rs"]
-mod meshes;
-
 use std::io::Write;
 use std::time::Instant;
 
+use common::meshes;
+use common::ms;
 use penumbra::render::layout::GpuScene;
 
 fn main() -> anyhow::Result<()> {
@@ -28,26 +26,25 @@ fn main() -> anyhow::Result<()> {
             .ok_or_else(|| anyhow::anyhow!("BUILDS: expected a positive integer, got '{a}'"))?,
         None => 7,
     };
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let bunny = meshes::bunny_scene(root)?;
+    let bunny = meshes::bunny_scene(&common::repo_root())?;
     let scene = meshes::sphere_scene(&bunny, 1_000_000);
-    let mut ms: Vec<f64> = (0..builds)
+    let mut build_ms: Vec<f64> = (0..builds)
         .map(|_| {
             let mut gpu = GpuScene::new(&scene);
             let start = Instant::now();
             gpu.build_bvh();
-            start.elapsed().as_secs_f64() * 1e3
+            ms(start.elapsed())
         })
         .collect();
-    ms.sort_by(f64::total_cmp);
+    build_ms.sort_by(f64::total_cmp);
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
         "{} triangles: build {:.1} ms median [{:.1}–{:.1}] of {builds}",
         scene.triangle_count(),
-        ms[ms.len() / 2],
-        ms[0],
-        ms[ms.len() - 1]
+        build_ms[build_ms.len() / 2],
+        build_ms[0],
+        build_ms[build_ms.len() - 1]
     )?;
     // Phases of the build, timed apart on fresh layouts (medians).
     let mut tree_ms = Vec::new();
@@ -56,10 +53,10 @@ fn main() -> anyhow::Result<()> {
         let mut gpu = GpuScene::new(&scene);
         let start = Instant::now();
         let built = gpu.build_chunked();
-        tree_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        tree_ms.push(ms(start.elapsed()));
         let start = Instant::now();
         gpu.encode_bvh(&built);
-        encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        encode_ms.push(ms(start.elapsed()));
     }
     tree_ms.sort_by(f64::total_cmp);
     encode_ms.sort_by(f64::total_cmp);

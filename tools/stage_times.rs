@@ -3,7 +3,7 @@
 //! frames, and prints each pipeline's median with the machine it ran on.
 //!
 //! ```sh
-//! cargo run --release --example stage_times -- scenes/bunny_scene.glb [FRAMES] [WxH]
+//! cargo run --release -p penumbra-tools --bin stage_times -- scenes/bunny_scene.glb [FRAMES] [WxH]
 //! ```
 //!
 //! With `WxH` the scene renders at that size (its field of view kept):
@@ -12,10 +12,8 @@
 
 use std::time::Duration;
 
-#[path = "bench/machine.rs"]
-#[allow(dead_code)]
-mod machine;
-
+use common::ms;
+use common::stats::upper_median;
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::tiles::{TilePlan, DEFAULT_STAGE_MEMORY};
 use penumbra::render::{Renderer, RendererOptions};
@@ -77,10 +75,7 @@ fn main() -> anyhow::Result<()> {
         }
         totals.push(f.stats.timings.render);
     }
-    let median = |v: &mut Vec<Duration>| {
-        v.sort();
-        v[v.len() / 2]
-    };
+    let median = |v: &[Duration]| upper_median(v).expect("at least one frame");
     println!(
         "{path} at {w}x{h}, {} tiles of {:.1} MiB stage memory, {frames} frames",
         first.stats.tiles,
@@ -88,19 +83,16 @@ fn main() -> anyhow::Result<()> {
     );
     println!(
         "machine: {}; device: {}",
-        machine::CpuInfo::read().describe(),
+        common::machine::CpuInfo::read().describe(),
         r.device().name
     );
     for (i, (name, _)) in first.stage_times.iter().enumerate() {
-        println!(
-            "  {name:<40} {:>8.1} ms",
-            median(&mut times[i]).as_secs_f64() * 1e3
-        );
+        println!("  {name:<40} {:>8.1} ms", ms(median(&times[i])));
     }
     println!(
         "  {:<40} {:>8.1} ms (median of the frames' render phase)",
         "all",
-        median(&mut totals).as_secs_f64() * 1e3
+        ms(median(&totals))
     );
     Ok(())
 }

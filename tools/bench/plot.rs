@@ -1,8 +1,7 @@
 //! `docs/scaling.png`: the scaling curves, drawn with plotters into an RGB
-//! buffer and written with the `image` crate. Text needs a TrueType font;
-//! plotters' `ab_glyph` backend takes one registered at run time (no system
-//! font lookup): DejaVu Sans from Debian's fonts-dejavu-core, or the file
-//! named by `PENUMBRA_BENCH_FONT`.
+//! buffer and written with the `image` crate. Text needs a TrueType font,
+//! registered at run time by `common::plot::register_font` (DejaVu Sans from
+//! Debian's fonts-dejavu-core, or the file named by `PENUMBRA_BENCH_FONT`).
 
 use std::path::Path;
 
@@ -10,38 +9,13 @@ use anyhow::Context as _;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::Results;
+use common::plot::{err, register_font};
 
-const FONT_PATHS: &[&str] = &[
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-];
-
-fn register_font() -> anyhow::Result<()> {
-    let from_env = std::env::var("PENUMBRA_BENCH_FONT").ok();
-    let path = from_env
-        .iter()
-        .map(String::as_str)
-        .chain(FONT_PATHS.iter().copied())
-        .find(|p| Path::new(p).is_file())
-        .context(
-            "the plot needs a TrueType font: install fonts-dejavu-core or set PENUMBRA_BENCH_FONT",
-        )?;
-    let bytes: &'static [u8] = Vec::leak(std::fs::read(path)?);
-    plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
-        .map_err(|_| anyhow::anyhow!("{path} is not a usable TrueType font"))?;
-    Ok(())
-}
+use crate::schema::Results;
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 /// (legend, colour, points).
 type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
-
-fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow::anyhow!("plot: {e:?}")
-}
 
 fn upper(v: impl Iterator<Item = f64>) -> f64 {
     v.fold(0.0, f64::max) * 1.15

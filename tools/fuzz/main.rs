@@ -3,10 +3,10 @@
 //! a clean `Err`, success, or a bug (panic, hang, huge allocation, crash).
 //!
 //! ```text
-//! cargo run --release --example fuzz -- [--cases N] [--seconds S] [--seed S]
+//! cargo run --release -p penumbra-tools --bin fuzz -- [--cases N] [--seconds S] [--seed S]
 //!     [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR]
-//! cargo run --release --example fuzz -- --replay FILE...
-//! cargo run --release --example fuzz -- --write-seeds DIR
+//! cargo run --release -p penumbra-tools --bin fuzz -- --replay FILE...
+//! cargo run --release -p penumbra-tools --bin fuzz -- --write-seeds DIR
 //! ```
 //!
 //! Runs on stable Rust without cargo-fuzz. Cases run in worker processes

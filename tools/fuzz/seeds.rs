@@ -22,7 +22,7 @@ pub struct Seed {
 
 /// The repository root (this program runs from anywhere inside it).
 pub fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    common::repo_root()
 }
 
 fn file(target: Target, path: &Path) -> Option<Seed> {

@@ -1,0 +1,13 @@
+//! The benchmark's parts, one module per part, each measured in a child
+//! process (`crate::child`) and returned as its struct of `crate::schema`;
+//! `knobs` and `profile` run the throughput part in further children.
+
+pub mod cli;
+pub mod cpu;
+pub mod knobs;
+pub mod peers;
+pub mod profile;
+pub mod scaling;
+pub mod seminar;
+pub mod specialise;
+pub mod throughput;

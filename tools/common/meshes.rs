@@ -1,0 +1,191 @@
+//! The benchmark's scenes: the bunny scene as committed, and variants of it
+//! with the bunny replaced by procedural meshes of any size (same camera,
+//! light, ground and materials).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::DVec3;
+use penumbra::loaders::{self, LoadOptions};
+use penumbra::scene::{Light, LightKind, Mesh, Scene, Shape};
+
+/// Loads `scenes/bunny_scene.glb`.
+pub fn bunny_scene(root: &Path) -> anyhow::Result<Scene> {
+    let path = root.join("scenes/bunny_scene.glb");
+    Ok(loaders::load_scene(&path, &LoadOptions::default())?.scene)
+}
+
+/// The bunny's mesh (the object with more than two triangles).
+pub fn bunny_mesh(scene: &mut Scene) -> &mut Mesh {
+    scene
+        .objects
+        .iter_mut()
+        .find_map(|o| match &mut o.shape {
+            Shape::Mesh(m) if m.indices.len() > 2 => Some(m),
+            _ => None,
+        })
+        .expect("the bunny scene has a bunny")
+}
+
+/// Area-weighted vertex normals.
+pub fn vertex_normals(positions: &[DVec3], indices: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; positions.len()];
+    for t in indices {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let face = (b - a).cross(c - a);
+        for &i in t {
+            n[i as usize] += face;
+        }
+    }
+    n.into_iter()
+        .map(|v| v.try_normalize().unwrap_or(DVec3::Y))
+        .collect()
+}
+
+/// One level of midpoint subdivision (each triangle into four) with the new
+/// edge vertices displaced by Phong tessellation (Boubekeur and Alexa 2008,
+/// shape factor 3/4): the midpoint is projected onto the tangent planes of
+/// both end vertices and the average taken, which bulges flat edges out to
+/// the curved surface the vertex normals describe. Shared edges get one new
+/// vertex, so the mesh stays watertight.
+pub fn subdivide(mesh: &Mesh) -> Mesh {
+    let normals = mesh
+        .normals
+        .clone()
+        .unwrap_or_else(|| vertex_normals(&mesh.positions, &mesh.indices));
+    let mut positions = mesh.positions.clone();
+    let mut new_normals = normals.clone();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut midpoint = |a: u32, b: u32, positions: &mut Vec<DVec3>, nn: &mut Vec<DVec3>| {
+        let key = (a.min(b), a.max(b));
+        *edges.entry(key).or_insert_with(|| {
+            let (pa, pb) = (positions[a as usize], positions[b as usize]);
+            let (na, nb) = (normals[a as usize], normals[b as usize]);
+            let m = (pa + pb) * 0.5;
+            let project = |p: DVec3, q: DVec3, n: DVec3| p - (p - q).dot(n) * n;
+            let phong = (project(m, pa, na) + project(m, pb, nb)) * 0.5;
+            positions.push(m * 0.25 + phong * 0.75);
+            nn.push((na + nb).try_normalize().unwrap_or(na));
+            positions.len() as u32 - 1
+        })
+    };
+    let mut indices = Vec::with_capacity(mesh.indices.len() * 4);
+    for &[a, b, c] in &mesh.indices {
+        let ab = midpoint(a, b, &mut positions, &mut new_normals);
+        let bc = midpoint(b, c, &mut positions, &mut new_normals);
+        let ca = midpoint(c, a, &mut positions, &mut new_normals);
+        indices.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    Mesh {
+        positions,
+        normals: Some(new_normals),
+        indices,
+    }
+}
+
+/// A bumpy sphere: a latitude/longitude grid of `rings` rings and
+/// `2·rings` meridians, radius modulated by a few sine waves, with vertex
+/// normals. At the poles each grid cell is one triangle, elsewhere two:
+/// 4·rings·(rings − 1) triangles, none degenerate.
+pub fn bumpy_sphere(rings: u32, centre: DVec3, radius: f64) -> Mesh {
+    let (n, m) = (rings, 2 * rings);
+    let mut positions = Vec::with_capacity(((n - 1) * m + 2) as usize);
+    let surface = |theta: f64, phi: f64| {
+        let r = radius
+            * (1.0 + 0.06 * (7.0 * theta).sin() * (5.0 * phi).sin() + 0.03 * (17.0 * phi).cos());
+        centre
+            + r * DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            )
+    };
+    positions.push(surface(0.0, 0.0)); // north pole: vertex 0
+    for i in 1..n {
+        let theta = std::f64::consts::PI * i as f64 / n as f64;
+        for j in 0..m {
+            let phi = std::f64::consts::TAU * j as f64 / m as f64;
+            positions.push(surface(theta, phi));
+        }
+    }
+    positions.push(surface(std::f64::consts::PI, 0.0)); // south pole
+    let south = positions.len() as u32 - 1;
+    let ring = |i: u32, j: u32| 1 + (i - 1) * m + j % m;
+    let mut indices = Vec::with_capacity((4 * n * (n - 1)) as usize);
+    for j in 0..m {
+        indices.push([0, ring(1, j + 1), ring(1, j)]);
+        indices.push([south, ring(n - 1, j), ring(n - 1, j + 1)]);
+    }
+    for i in 1..n - 1 {
+        for j in 0..m {
+            let (a, b) = (ring(i, j), ring(i, j + 1));
+            let (c, d) = (ring(i + 1, j), ring(i + 1, j + 1));
+            indices.push([a, b, d]);
+            indices.push([a, d, c]);
+        }
+    }
+    let normals = vertex_normals(&positions, &indices);
+    Mesh {
+        positions,
+        normals: Some(normals),
+        indices,
+    }
+}
+
+/// The number of rings whose bumpy sphere has about `triangles` triangles.
+pub fn rings_for(triangles: u64) -> u32 {
+    ((1.0 + (1.0 + triangles as f64).sqrt()) / 2.0)
+        .round()
+        .max(3.0) as u32
+}
+
+/// The bunny scene with the bunny replaced by a bumpy sphere of about
+/// `triangles` triangles, standing on the ground where the bunny stood and
+/// about as large.
+pub fn sphere_scene(bunny: &Scene, triangles: u64) -> Scene {
+    let mut scene = bunny.clone();
+    let mesh = bunny_mesh(&mut scene);
+    let (lo, hi) = mesh.bounds().expect("bunny has vertices");
+    let extent = hi - lo;
+    let radius = (extent.x + extent.y + extent.z) / 6.0;
+    let centre = DVec3::new(
+        (lo.x + hi.x) / 2.0,
+        lo.y + radius * 1.1,
+        (lo.z + hi.z) / 2.0,
+    );
+    *mesh = bumpy_sphere(rings_for(triangles), centre, radius);
+    scene
+}
+
+/// The bunny scene with the bunny subdivided `levels` times.
+pub fn subdivided_bunny(bunny: &Scene, levels: u32) -> Scene {
+    let mut scene = bunny.clone();
+    let mesh = bunny_mesh(&mut scene);
+    for _ in 0..levels {
+        *mesh = subdivide(mesh);
+    }
+    scene
+}
+
+/// The bunny scene lit by `count` directional lights: the scene's light and
+/// copies of it turned about the vertical axis in equal steps, each with
+/// 1/count of the intensity (the image keeps its brightness).
+pub fn with_lights(bunny: &Scene, count: usize) -> Scene {
+    let mut scene = bunny.clone();
+    let base: Light = scene.lights[0];
+    let LightKind::Directional { direction } = base.kind else {
+        panic!("the bunny scene's light is directional");
+    };
+    scene.lights = (0..count)
+        .map(|k| {
+            let angle = std::f64::consts::TAU * k as f64 / count as f64;
+            let turned = glam::DQuat::from_rotation_y(angle) * direction;
+            Light {
+                kind: LightKind::Directional { direction: turned },
+                intensity: base.intensity / count as f32,
+                ..base
+            }
+        })
+        .collect();
+    scene
+}
