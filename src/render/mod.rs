@@ -290,6 +290,8 @@ pub struct Renderer {
     reuse_hits: bool,
     uploads: u64,
     stage_memory: u64,
+    /// The largest image band, at most the device's buffer binding.
+    band_bytes: u64,
     shaders: ShaderSource,
     kernel: KernelOptions,
     context: Context,
@@ -336,6 +338,7 @@ impl Renderer {
             profile_stages: false,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
+            band_bytes: u64::MAX,
             shaders: opts.shaders.clone(),
             kernel: opts.kernel,
             context,
@@ -362,6 +365,14 @@ impl Renderer {
     pub fn set_stage_memory(&mut self, bytes: u64) {
         self.stage_memory = bytes.max(tiles::MIN_STAGE_MEMORY);
         self.stage_buffers.clear();
+    }
+
+    /// Caps each band of the image (and of its AOVs) at `bytes` (at most
+    /// the device's `maxStorageBufferRange`, at least 8 rows), so that an
+    /// image of any size shows that its bands join without a seam; a lower
+    /// cap means more bands and the same image.
+    pub fn set_image_band_bytes(&mut self, bytes: u64) {
+        self.band_bytes = bytes;
     }
 
     /// The device in use.
@@ -579,7 +590,7 @@ impl Renderer {
             radiance: ctx.create_buffer(
                 "colour sums",
                 BufferUsage::Storage,
-                px * tiles::RADIANCE_BYTES,
+                px * plan.radiance_bytes(),
             )?,
             image: None,
             holds: None,
@@ -947,7 +958,9 @@ impl Renderer {
                 ),
             });
         }
-        let max_buffer = self.context.limits().max_storage_buffer_range;
+        // A test's cap on the bands holds at least 8 rows of AOVs.
+        let cap = self.band_bytes.max(width as u64 * 8 * 32);
+        let max_buffer = self.context.limits().max_storage_buffer_range.min(cap);
         let bands = ImageBands::plan(width, rows.clone(), with_aovs, &mut plan, max_buffer)?;
         let kept = self.stage_buffers_for(plan)?;
         let tiles = bands.tiles(&plan);

@@ -3,9 +3,10 @@
 //! with any number of light samples, renders within a fixed memory bound.
 //!
 //! A tile is a rectangle of whole 8×8 workgroups. Its stage memory is
-//! `pixels × (hit record + colour sum + samples per chunk × queue entry)`;
-//! when a pixel has more light samples than a chunk holds, the light,
-//! shadow and shade stages run once per chunk of samples.
+//! `pixels × (hit record + samples per chunk × queue entry)`; when a pixel
+//! has more light samples than a chunk holds, the shadow and shade stages
+//! run once per chunk of samples, and each pixel's colour sums over the
+//! chunks in a colour sum of its own (one chunk writes the image directly).
 
 /// Texels of one hit record (`RECORD_TEXELS` in
 /// `shaders/stages/records.wgsl`).
@@ -14,7 +15,7 @@ pub const RECORD_TEXELS: u64 = 5;
 pub const QUEUE_TEXELS: u64 = 2;
 /// Bytes of one pixel's hit record and resolved material.
 pub const HIT_RECORD_BYTES: u64 = (RECORD_TEXELS + 1) * 16;
-/// Bytes of one pixel's colour sum.
+/// Bytes of one pixel's colour sum (only when there is more than one chunk).
 pub const RADIANCE_BYTES: u64 = 16;
 /// Bytes of one queued light sample: direction and distance, falloff and
 /// light.
@@ -44,7 +45,7 @@ impl TilePlan {
     /// buffers of at most `max_buffer` bytes each.
     pub fn new(size: [u32; 2], samples: u32, bound: u64, max_buffer: u64) -> TilePlan {
         let chunk = samples.clamp(1, MAX_CHUNK);
-        let per_pixel = HIT_RECORD_BYTES + RADIANCE_BYTES + chunk as u64 * QUEUE_ENTRY_BYTES;
+        let per_pixel = per_pixel(samples, chunk);
         let largest = (HIT_RECORD_BYTES).max(chunk as u64 * 16);
         let pixels = (bound.max(MIN_STAGE_MEMORY) / per_pixel)
             .min(max_buffer / largest)
@@ -67,7 +68,16 @@ impl TilePlan {
 
     /// Bytes of stage memory the plan's buffers take.
     pub fn bytes(&self) -> u64 {
-        self.pixels() * (HIT_RECORD_BYTES + RADIANCE_BYTES + self.chunk as u64 * QUEUE_ENTRY_BYTES)
+        self.pixels() * per_pixel(self.samples, self.chunk)
+    }
+
+    /// Bytes of one tile pixel's colour sum: 0 when one chunk holds all
+    /// samples (the shade stage then writes the image directly).
+    pub fn radiance_bytes(&self) -> u64 {
+        match self.samples > self.chunk {
+            true => RADIANCE_BYTES,
+            false => 0,
+        }
     }
 
     /// The sample chunks: (first sample, samples in the chunk); one empty
@@ -95,6 +105,16 @@ impl TilePlan {
         }
         out
     }
+}
+
+/// Stage memory of one pixel for `samples` light samples in chunks of
+/// `chunk`.
+fn per_pixel(samples: u32, chunk: u32) -> u64 {
+    let radiance = match samples > chunk {
+        true => RADIANCE_BYTES,
+        false => 0,
+    };
+    HIT_RECORD_BYTES + radiance + chunk as u64 * QUEUE_ENTRY_BYTES
 }
 
 #[cfg(test)]
