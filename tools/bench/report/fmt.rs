@@ -65,6 +65,7 @@ pub fn mrays(t: &Throughput) -> String {
     )
 }
 
+/// Values without decimals, comma-separated.
 pub fn list0(v: &[f64]) -> String {
     v.iter()
         .map(|x| format!("{x:.0}"))
