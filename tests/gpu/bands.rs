@@ -51,7 +51,10 @@ fn banded_images_and_aovs_equal_one_band() {
     r.0.set_image_band_bytes(203 * 32 * 24);
     let (banded, banded_aovs) = progressive(&mut r.0, &scene, 3);
     assert_eq!(banded.stats.passes, 3);
-    assert!(banded.image.pixels == one.image.pixels, "banded image differs");
+    assert!(
+        banded.image.pixels == one.image.pixels,
+        "banded image differs"
+    );
     assert_eq!(banded_aovs.depth.len(), 203 * 141);
     assert!(banded_aovs.depth == one_aovs.depth, "AOV depth differs");
     assert!(banded_aovs.normal == one_aovs.normal, "AOV normal differs");
@@ -71,7 +74,9 @@ fn banded_images_and_aovs_equal_one_band() {
         rows: 37..120,
         passes: 0..3,
     };
-    let got = r.0.render_part(&uploaded, &part, &sampling, &mut |_| {}).expect("part");
+    let got =
+        r.0.render_part(&uploaded, &part, &sampling, &mut |_| {})
+            .expect("part");
     assert_eq!(got.image.height, 83);
     let want = &one.image.pixels[37 * 203..120 * 203];
     for (i, (g, w)) in got.image.pixels.iter().zip(want).enumerate() {
@@ -96,5 +101,8 @@ fn a_reused_frame_keeps_its_background_after_a_render_of_another_size() {
     r.reload_shaders(&mut uploaded).expect("reload");
     let again = r.render_uploaded(&uploaded, w, h).expect("render");
     assert!(again.stats.hits_reused, "the frame reuses its hit records");
-    assert!(again.image.pixels == first.image.pixels, "the reused frame differs");
+    assert!(
+        again.image.pixels == first.image.pixels,
+        "the reused frame differs"
+    );
 }

@@ -1,9 +1,10 @@
 //! The tests that drive the library's Vulkan renderer in this process: one
 //! test binary, one module per concept. They share one device and one kernel
 //! cache ([`support::renderer`], opened by the first test that asks for it);
-//! a test that switches the shared renderer's kernel or stage memory holds
-//! its lock until it has switched them back. They need a Vulkan device
-//! (lavapipe in CI) and fail loudly when there is none; they never skip.
+//! a test that switches the shared renderer's kernel, stage memory or band
+//! cap holds its lock until it has switched them back. They need a Vulkan
+//! device (lavapipe in CI) and fail loudly when there is none; they never
+//! skip.
 //!
 //! One concept: `cargo test --test gpu shading::` (docs/tests.md).
 
@@ -13,8 +14,8 @@ mod vulkan_kernel;
 mod watch_support;
 
 mod aov;
-mod bands;
 mod area_lights;
+mod bands;
 mod bunny;
 mod camera;
 mod checker;
