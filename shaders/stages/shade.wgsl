@@ -96,13 +96,21 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         colour = penumbra_radiance[slot].xyz;
     }
     let base = slot * push.sample_count;
+    // A light's samples are adjacent in the queue: its colours are loaded
+    // once per light, not per sample.
+    var light = 0xffffffffu;
+    var diffuse = vec4<u32>(0u);
+    var specular = vec4<u32>(0u);
     for (var e = 0u; e < push.sample_count; e++) {
         let q = (base + e) * penumbra_QUEUE_TEXELS;
         let sample = textureLoad(penumbra_queue, penumbra_texel(q + 1u));
         let falloff = bitcast<f32>(sample.x);
         if falloff > 0.0 {
-            let diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * sample.y));
-            let specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * sample.y + 1u));
+            if sample.y != light {
+                light = sample.y;
+                diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * light));
+                specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * light + 1u));
+            }
             let to_light = penumbra_f3(textureLoad(penumbra_queue, penumbra_texel(q)));
             let l = LightSample(to_light, falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
             colour += shade(s, l, p);
