@@ -27,10 +27,11 @@ const RECORD_TEXELS: u32 = 5u;
 // Material resolve's result (1 texel a record at binding 16): the leaf
 // shader, its program, the first of its parameter words, 0.
 // A queue entry (render::layout::QUEUE_TEXELS texels at binding 15):
-//   0: unit direction to the light, distance to it
-//   1: falloff at the point (0: below the surface or occluded, nothing to
-//      add), the light's index, 0, 0
-const QUEUE_TEXELS: u32 = 2u;
+//   0: unit direction to the light, falloff at the point (0: below the
+//      surface or occluded, nothing to add)
+// Which light a sample belongs to follows from its index (lights in scene
+// order, each light's samples in turn), so the entry does not hold it.
+const QUEUE_TEXELS: u32 = 1u;
 
 // The records, for the stages that read them (the hit stage writes them as
 // `hit_records_out`: a stage that writes a stage image names it `<name>_out`).

@@ -33,7 +33,7 @@ struct penumbra_PushConstants {
 // The hit records, material resolve's result and the queue (texel images:
 // stages/records.wgsl), every leaf's parameters (4-word aligned, one texel
 // per 4 words of its Params) and each light's colours (3 texels: diffuse and
-// intensity, specular, ambient).
+// intensity, specular and sample count, ambient).
 @group(0) @binding(14) var penumbra_hit_records: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(15) var penumbra_queue: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(16) var penumbra_resolved: texture_storage_2d<rgba32uint, read>;
@@ -52,7 +52,7 @@ const penumbra_FLAG_FRESH: u32 = 2u;
 const penumbra_FLAG_LAST_CHUNK: u32 = 4u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
-const penumbra_QUEUE_TEXELS: u32 = 2u;
+const penumbra_QUEUE_TEXELS: u32 = 1u;
 const penumbra_TEXEL_ROW_SHIFT: u32 = 12u;
 
 fn penumbra_texel(i: u32) -> vec2<u32> {
@@ -96,23 +96,26 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         colour = penumbra_radiance[slot].xyz;
     }
     let base = slot * push.sample_count;
-    // A light's samples are adjacent in the queue: its colours are loaded
-    // once per light, not per sample.
-    var light = 0xffffffffu;
-    var diffuse = vec4<u32>(0u);
-    var specular = vec4<u32>(0u);
+    // The light of each sample: lights in scene order, each light's samples
+    // in turn (its sample count is the w of its specular texel), so its
+    // colours are loaded once per light, not per sample. The walk depends
+    // on the sample index only: every lane takes the same steps.
+    var light = 0u;
+    var diffuse = textureLoad(penumbra_light_colours, penumbra_texel(0u));
+    var specular = textureLoad(penumbra_light_colours, penumbra_texel(1u));
+    var end = specular.w;
     for (var e = 0u; e < push.sample_count; e++) {
-        let q = (base + e) * penumbra_QUEUE_TEXELS;
-        let sample = textureLoad(penumbra_queue, penumbra_texel(q + 1u));
-        let falloff = bitcast<f32>(sample.x);
+        let k = push.sample_first + e;
+        while k >= end && light + 1u < push.light_count {
+            light += 1u;
+            diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * light));
+            specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * light + 1u));
+            end += specular.w;
+        }
+        let sample = textureLoad(penumbra_queue, penumbra_texel((base + e) * penumbra_QUEUE_TEXELS));
+        let falloff = bitcast<f32>(sample.w);
         if falloff > 0.0 {
-            if sample.y != light {
-                light = sample.y;
-                diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * light));
-                specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * light + 1u));
-            }
-            let to_light = penumbra_f3(textureLoad(penumbra_queue, penumbra_texel(q)));
-            let l = LightSample(to_light, falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
+            let l = LightSample(penumbra_f3(sample), falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
             colour += shade(s, l, p);
         }
     }

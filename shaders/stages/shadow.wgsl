@@ -50,7 +50,7 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             for (var j = 0u; j < count; j++) {
                 if k >= first && k < end {
-                    var ray = vec4<f32>(0.0);
+                    var to_light = vec3<f32>(0.0);
                     var falloff = 0.0;
                     if start.found {
                         var uv = vec2<f32>(0.5);
@@ -61,14 +61,13 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
                         if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
                             traced += 1u;
                             if !occluded(start, ls.to_light, ls.distance) {
-                                ray = vec4<f32>(ls.to_light, ls.distance);
+                                to_light = ls.to_light;
                                 falloff = ls.falloff;
                             }
                         }
                     }
                     let entry = base + k - first;
-                    textureStore(queue, queue_texel(entry, 0u), bitcast<vec4<u32>>(ray));
-                    textureStore(queue, queue_texel(entry, 1u), vec4<u32>(bitcast<u32>(falloff), i, 0u, 0u));
+                    textureStore(queue, queue_texel(entry, 0u), vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff)));
                 }
                 k++;
             }

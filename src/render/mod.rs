@@ -1269,16 +1269,18 @@ fn set_leaves(nodes: &mut [layout::ShaderNode], materials: &Materials) {
 }
 
 /// Each light's colours for the shade stage, three texels a light:
-/// (diffuse, intensity), (specular, 0), (ambient, 0), as bits.
+/// (diffuse, intensity), (specular, sample count), (ambient, 0), as bits
+/// (the count as an integer: the shade stage finds each queued sample's
+/// light from it).
 fn light_colours(lights: &[layout::Light]) -> Vec<[u32; 4]> {
-    let bits = |c: [f32; 3], w: f32| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), w.to_bits()];
+    let bits = |c: [f32; 3], w: u32| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), w];
     lights
         .iter()
         .flat_map(|l| {
             [
-                bits(l.diffuse, l.intensity),
-                bits(l.specular, 0.0),
-                bits(l.ambient, 0.0),
+                bits(l.diffuse, l.intensity.to_bits()),
+                bits(l.specular, l.samples),
+                bits(l.ambient, 0),
             ]
         })
         .collect()

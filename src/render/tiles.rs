@@ -12,13 +12,12 @@
 /// `shaders/stages/records.wgsl`).
 pub const RECORD_TEXELS: u64 = 5;
 /// Texels of one queued light sample (`QUEUE_TEXELS`).
-pub const QUEUE_TEXELS: u64 = 2;
+pub const QUEUE_TEXELS: u64 = 1;
 /// Bytes of one pixel's hit record and resolved material.
 pub const HIT_RECORD_BYTES: u64 = (RECORD_TEXELS + 1) * 16;
 /// Bytes of one pixel's colour sum (only when there is more than one chunk).
 pub const RADIANCE_BYTES: u64 = 16;
-/// Bytes of one queued light sample: direction and distance, falloff and
-/// light.
+/// Bytes of one queued light sample: direction and falloff.
 pub const QUEUE_ENTRY_BYTES: u64 = QUEUE_TEXELS * 16;
 /// Most light samples per pixel one chunk holds.
 pub const MAX_CHUNK: u32 = 64;
