@@ -445,14 +445,15 @@ field_cases! {
 }
 
 #[test]
-fn image_larger_than_device_storage_limit() {
-    // 16384 x 16384 x 16 bytes = 4 GiB, far above lavapipe's 128 MiB.
+fn image_larger_than_one_render_holds() {
+    // 16384 x 16384 x 16 bytes = 4 GiB, above the 1 GiB one render holds
+    // (render::bands::MAX_IMAGE_BYTES); tiles of a split render can.
     let s = mutated(|_| {});
     let e = fails_with(
         "scene.json",
         s,
         &["--width", "16384", "--height", "16384"],
-        &["maxStorageBufferRange", "16384x16384"],
+        &["1024 MiB one render holds", "16384x16384", "--tile"],
     );
     assert!(
         e.contains(": --width/--height: "),
@@ -466,9 +467,10 @@ fn image_larger_than_device_storage_limit() {
     let e = json_fails(
         &s,
         "camera.width/camera.height",
-        &["maxStorageBufferRange", "16384x16384"],
+        &["1024 MiB one render holds", "16384x16384"],
     );
-    assert!(!e.contains("--"), "no option was given\n{e}");
+    // The field is the scene's (the advice names the tile option).
+    assert!(!e.contains(": --width"), "no option was given\n{e}");
 }
 
 // ------------------------------------------------------------ command line

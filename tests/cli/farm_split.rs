@@ -329,6 +329,43 @@ fn a_tile_of_an_image_too_large_for_one_device_buffer_renders() {
 }
 
 #[test]
+fn an_undivided_image_larger_than_one_device_buffer_equals_its_tiles() {
+    // 2944x2944 needs a 132 MiB image, over lavapipe's 128 MiB
+    // maxStorageBufferRange: one render keeps it in two bands of rows
+    // (src/render/bands.rs), and its rows equal a tile's, bit for bit.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = repo("scenes/showcase.json");
+    let big = [
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "2944",
+        "--height",
+        "2944",
+    ];
+    ok(&[&big[..], &["-o", "full.exr"]].concat(), d);
+    ok(&[&big[..], &["--tile", "3/4", "-o", "p.exr"]].concat(), d);
+    let info = part::read_info(&d.join("p.exr")).unwrap();
+    let rows = info.rows.clone();
+    // The tile's rows straddle the boundary of the two bands (row 2848:
+    // 128 MiB holds 2849 rows of 2944 pixels, rounded down to 8).
+    assert!(rows.start < 2848 && rows.end > 2848, "{rows:?}");
+    let tile = part::read_pixels(&d.join("p.exr"), &info).unwrap();
+    let full = penumbra::metrics::read_image(&d.join("full.exr")).unwrap();
+    assert_eq!((full.width, full.height), (2944, 2944));
+    let want = &full.pixels[rows.start as usize * 2944..rows.end as usize * 2944];
+    assert_eq!(tile.len(), want.len());
+    let differ = tile
+        .iter()
+        .zip(want)
+        .filter(|(t, w)| t[..] != w[..3])
+        .count();
+    assert_eq!(differ, 0, "{differ} pixels of rows {rows:?} differ");
+    assert!(tile.iter().any(|p| p[0] > 0.0), "the tile is black");
+}
+
+#[test]
 fn farm_slurm_writes_a_script_or_one_error_naming_the_flag() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
