@@ -72,7 +72,7 @@
 //!   `n > 0`: the normal-incidence albedo of the `(n+8)/(8π)` form is
 //!   `ρ_s·(n+8)(n+2^(−n/2))/((n+2)(n+4))`, up to 7.5 % above `ρ_s` (near
 //!   `n = 10`) and `≈ ρ_s·(1 + 2/n)` for large `n`. So it conserves energy only
-//!   approximately; `docs/brdf.md` (from `cargo run --example brdf_lab`) has the
+//!   approximately; `docs/brdf.md` (from `cargo run -p penumbra-tools --bin brdf_lab`) has the
 //!   numbers. (What *is* exactly normalised is the microfacet distribution
 //!   `D(h) = (n+2)/(2π)·(n·h)^n`, with `∫ D(h)(n·h) dω_h = 1`.)
 //!
@@ -105,7 +105,7 @@
 //! converges, as it does here); [`Estimate::error`] carries it, and the
 //! closed forms at normal incidence (`ρ_d + ρ_s` for modified Phong, `2π/(n+2)`
 //! and `2π/(n+1)` for the unnormalised Phong lobes, `ρ_d` for Lambert) check
-//! it in `tests/brdf.rs`.
+//! it in `tests/cpu/brdf.rs`.
 
 use rayon::prelude::*;
 use std::f64::consts::PI;

@@ -40,7 +40,7 @@
 //! dense mesh) that decides the best split, so when the sample's bounds
 //! cover less than `SAMPLE_COVER` (95 %) of the node's area the node bins
 //! everything. The sample costs the trees a fraction of a per cent of SAH
-//! cost ([`Bvh::sah_cost`]; `cargo run --release --example build_time`
+//! cost ([`Bvh::sah_cost`]; `cargo run --release -p penumbra-tools --bin build_time`
 //! prints it) and saves a pass over every large node. Sampling, chunking
 //! and every reduction are fixed by the input alone, so the tree does not
 //! depend on rayon's scheduling. docs/history.md has the measurements

@@ -7,7 +7,7 @@
 #   tools/setup.sh              loader + lavapipe unless the loader reports a GPU
 #   tools/setup.sh --tests      also what the test suite needs: the Khronos validation
 #                               layer, Chromium (the `penumbra watch --serve` page test,
-#                               tests/watch_browser.rs, drives it headless) and Debian's
+#                               tests/cli/watch_browser.rs, drives it headless) and Debian's
 #                               main-suite lavapipe unpacked into target/ (tools/mesa_tree.sh)
 #                               for the render tests against the older driver; --ci is the same
 #   tools/setup.sh --dry-run    say what was found and what would be done; change nothing
@@ -23,7 +23,7 @@
 # Test hook: PENUMBRA_SETUP_DEVICES_FILE=FILE takes FILE as the output of
 # `vulkaninfo --summary` (the value `no-loader` stands for a machine without the loader) and
 # PENUMBRA_SETUP_MESA_VERSION as the installed mesa-vulkan-drivers version (`none`: not
-# installed); either implies --dry-run (tests/setup_script.rs).
+# installed); either implies --dry-run (tests/cli/setup_script.rs).
 #
 # The backports suite is added on the mirror the machine already uses; no
 # mirror address is written here. Idempotent: a second run changes nothing.
@@ -141,7 +141,7 @@ else
 fi
 if [ "$want_layers" = 1 ]; then
   packages+=(vulkan-validationlayers)
-  # Headless browser for tests/watch_browser.rs.
+  # Headless browser for tests/cli/watch_browser.rs.
   packages+=(chromium)
 fi
 
@@ -179,7 +179,7 @@ if [ "$want_layers" = 1 ]; then
   "$tools_dir/mesa_tree.sh"
 fi
 
-# --tests: a single-host Slurm cluster for the farm tests (tests/farm_slurm.rs starts it with
+# --tests: a single-host Slurm cluster for the farm tests (tests/cli/farm_slurm.rs starts it with
 # tools/slurm-local.sh), from the main suite (Debian 12: Slurm 22.05, the version the
 # set-up in tools/slurm-local.sh was found to work with).
 slurm_packages=(slurmctld slurmd slurm-client munge)

@@ -31,7 +31,7 @@
 //! `f32`; an `f64` path with the same checks takes larger ones), and walks
 //! the tree in parallel, each subtree writing its own run of records
 //! (straight from the builder's chunks), so encoding stays a small part of
-//! the build (`cargo run --release --example build_time` prints the phases).
+//! the build (`cargo run --release -p penumbra-tools --bin build_time` prints the phases).
 
 use glam::Vec3A;
 
