@@ -96,28 +96,31 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         colour = penumbra_radiance[slot].xyz;
     }
     let base = slot * push.sample_count;
-    // The light of each sample: lights in scene order, each light's samples
-    // in turn (its sample count is the w of its specular texel), so its
-    // colours are loaded once per light, not per sample. The walk depends
-    // on the sample index only: every lane takes the same steps.
-    var light = 0u;
-    var diffuse = textureLoad(penumbra_light_colours, penumbra_texel(0u));
-    var specular = textureLoad(penumbra_light_colours, penumbra_texel(1u));
-    var end = specular.w;
-    for (var e = 0u; e < push.sample_count; e++) {
-        let k = push.sample_first + e;
-        while k >= end && light + 1u < push.light_count {
-            light += 1u;
-            diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * light));
-            specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * light + 1u));
-            end += specular.w;
+    // The chunk's samples light by light: lights in scene order, each
+    // light's samples in turn (its sample count is the w of its specular
+    // texel), so a light's colours are loaded once, not per sample. The
+    // loops depend on the push constants only: every lane takes the same
+    // steps.
+    let chunk_end = push.sample_first + push.sample_count;
+    var light_first = 0u;
+    for (var i = 0u; i < push.light_count && light_first < chunk_end; i++) {
+        let specular = textureLoad(penumbra_light_colours, penumbra_texel(3u * i + 1u));
+        let light_end = light_first + specular.w;
+        let first = max(light_first, push.sample_first);
+        let end = min(light_end, chunk_end);
+        if first < end {
+            let diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * i));
+            for (var k = first; k < end; k++) {
+                let e = base + k - push.sample_first;
+                let sample = textureLoad(penumbra_queue, penumbra_texel(e * penumbra_QUEUE_TEXELS));
+                let falloff = bitcast<f32>(sample.w);
+                if falloff > 0.0 {
+                    let l = LightSample(penumbra_f3(sample), falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
+                    colour += shade(s, l, p);
+                }
+            }
         }
-        let sample = textureLoad(penumbra_queue, penumbra_texel((base + e) * penumbra_QUEUE_TEXELS));
-        let falloff = bitcast<f32>(sample.w);
-        if falloff > 0.0 {
-            let l = LightSample(penumbra_f3(sample), falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
-            colour += shade(s, l, p);
-        }
+        light_first = light_end;
     }
     if (push.flags & penumbra_FLAG_LAST_CHUNK) == 0u {
         penumbra_radiance[slot] = vec4<f32>(colour, 1.0);
