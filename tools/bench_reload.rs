@@ -255,7 +255,7 @@ fn describe(l: &Latency) -> String {
         .collect();
     format!(
         "Pipelines recompiled per edit: {} (nothing of the traversal). \
-         Hit records reused (only the shade and gather stages ran) by the preview and the full image: \
+         Hit records reused (only the shade stages ran) by the preview and the full image: \
          **{} of 10 edits**. An undo back to an earlier edit's text, whose pipeline Mesa's shader \
          cache holds, shows its preview {:.0} ms after the save (median of 3).",
         lists.join("; or "),
@@ -468,9 +468,10 @@ fn main() -> anyhow::Result<()> {
          (`~/.cache/mesa_shader_cache*`) cannot hide the driver compile, as it would for a \
          pipeline it has seen. Times from the start of the save (`write`) to the image renamed \
          into place; the split comes from the loop's own report. The renderer runs in stages \
-         (hit, resolve, shadow with light sampling, one shade pipeline per shader file, gather: \
-         `src/render/stages.rs`), so a shading edit recompiles only its file's shade pipeline \
-         and the render after it reruns only shade and gather on the hit records it kept.\n\n\
+         (hit with material resolve, shadow with light sampling, one shade pipeline per shader \
+         file: `src/render/stages.rs`), so a shading edit recompiles only its file's shade \
+         pipeline and the render after it reruns only the shade pipelines on the hit records it \
+         kept.\n\n\
          ## Phong edit → preview on disk (10 edits of `shaders/shading/phong.wgsl`)\n\n\
          Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\n{}\n\
          ## User shader edit → preview on disk (10 edits)\n\n\
