@@ -101,6 +101,10 @@ fn main() -> anyhow::Result<()> {
         "--work and --work-pixels: must be > 0"
     );
     anyhow::ensure!(args.bandwidth_gbs > 0.0, "--bandwidth-gbs: must be > 0");
+    anyhow::ensure!(
+        args.side > 0 && args.spp > 0,
+        "--side and --spp: must be > 0"
+    );
     let one = {
         let s = args.split(1.0);
         s.serial + s.parallel

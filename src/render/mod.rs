@@ -959,7 +959,8 @@ impl Renderer {
             });
         }
         // A test's cap on the bands holds at least 8 rows of AOVs.
-        let cap = self.band_bytes.max(width as u64 * 8 * 32);
+        let aov_size = std::mem::size_of::<layout::Aov>() as u64;
+        let cap = self.band_bytes.max(width as u64 * 8 * aov_size);
         let max_buffer = self.context.limits().max_storage_buffer_range.min(cap);
         let bands = ImageBands::plan(width, rows.clone(), with_aovs, &mut plan, max_buffer)?;
         let kept = self.stage_buffers_for(plan)?;

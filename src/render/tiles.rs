@@ -73,10 +73,7 @@ impl TilePlan {
     /// Bytes of one tile pixel's colour sum: 0 when one chunk holds all
     /// samples (the shade stage then writes the image directly).
     pub fn radiance_bytes(&self) -> u64 {
-        match self.samples > self.chunk {
-            true => RADIANCE_BYTES,
-            false => 0,
-        }
+        radiance_bytes(self.samples, self.chunk)
     }
 
     /// The sample chunks: (first sample, samples in the chunk); one empty
@@ -109,11 +106,15 @@ impl TilePlan {
 /// Stage memory of one pixel for `samples` light samples in chunks of
 /// `chunk`.
 fn per_pixel(samples: u32, chunk: u32) -> u64 {
-    let radiance = match samples > chunk {
+    HIT_RECORD_BYTES + radiance_bytes(samples, chunk) + chunk as u64 * QUEUE_ENTRY_BYTES
+}
+
+/// A pixel's colour sum: only when its samples take more than one chunk.
+fn radiance_bytes(samples: u32, chunk: u32) -> u64 {
+    match samples > chunk {
         true => RADIANCE_BYTES,
         false => 0,
-    };
-    HIT_RECORD_BYTES + radiance + chunk as u64 * QUEUE_ENTRY_BYTES
+    }
 }
 
 #[cfg(test)]
