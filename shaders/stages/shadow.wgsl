@@ -1,6 +1,7 @@
-// Stage 3, light samples and shadows: for each light sample of the chunk
-// the queue holds, the direction and distance to the light and its falloff
-// at the hit point, and an any-hit traversal of its shadow ray. A sample
+// Stage 2, light samples and shadows: for each light sample of the chunk
+// the queue holds, the direction to the light and its falloff at the hit
+// point (queued: stages/records.wgsl), and an any-hit traversal of its
+// shadow ray up to the light. A sample
 // below the geometric surface or the shading normal needs no ray (the
 // surface itself is in the way); it and an occluded one get falloff 0, so
 // the shade stage adds the contribution of every sample that reaches its
