@@ -27,6 +27,7 @@ fn scene(samples: u32) -> (Scene, [DVec3; 4]) {
     let corner = DVec3::new(-0.5, 1.0, -0.5);
     let (e1, e2) = (DVec3::X, DVec3::Z);
     let scene = Scene {
+        textures: vec![],
         camera: Camera {
             position: DVec3::new(0.0, 0.5, 0.0),
             orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
@@ -36,12 +37,14 @@ fn scene(samples: u32) -> (Scene, [DVec3; 4]) {
         },
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
+            textures: Default::default(),
             ambient: Vec3::ZERO,
             diffuse: Vec3::ONE,
             specular: Vec3::ZERO,
             shininess: 1.0,
         })],
         objects: vec![Object {
+            maps: Default::default(),
             shape: Shape::Plane(Plane {
                 point: DVec3::ZERO,
                 normal: DVec3::Y,

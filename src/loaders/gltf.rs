@@ -104,11 +104,13 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
                 colours.len() - 1
             });
         objects.push(Object {
+            maps: Default::default(),
             shape: Shape::Mesh(m.mesh),
             shader,
         });
     }
     let phong = |diffuse| Phong {
+        textures: Default::default(),
         ambient: Vec3::ZERO,
         diffuse,
         specular: Vec3::ZERO,
@@ -145,6 +147,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         lights.push(default_light(&camera));
     }
     let scene = Scene {
+        textures: vec![],
         camera,
         background: Vec3::ZERO,
         shaders,
@@ -636,6 +639,9 @@ impl Reader<'_> {
         }
         let base_color = self.base_color(&prim.material())?;
         let mesh = Mesh {
+            uvs: vec![],
+            colours: None,
+            tangents: None,
             positions,
             normals,
             indices: triangles,

@@ -579,6 +579,7 @@ impl Reader<'_> {
                 ));
             }
             let p = Phong {
+                textures: Default::default(),
                 ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
                 diffuse: self.colour(&f("diffuse"), s.diffuse.unwrap_or_default())?,
                 specular: self.colour(&f("specular"), s.specular.unwrap_or_default())?,
@@ -824,6 +825,7 @@ impl Reader<'_> {
             ObjectKind::Mesh => return self.mesh(&at, o, shader, base, guard, loaded),
         };
         loaded.scene.objects.push(Object {
+            maps: Default::default(),
             shape,
             shader: shader.unwrap_or_default(),
         });
@@ -870,6 +872,7 @@ impl Reader<'_> {
                 None => {
                     let kd = gm.base_color.unwrap_or(Vec3::ONE);
                     loaded.scene.shaders.push(Shader::Phong(Phong {
+                        textures: Default::default(),
                         ambient: Vec3::ZERO,
                         diffuse: kd,
                         specular: Vec3::ZERO,
@@ -888,6 +891,7 @@ impl Reader<'_> {
                 }
             }
             loaded.scene.objects.push(Object {
+                maps: Default::default(),
                 shape: Shape::Mesh(mesh),
                 shader,
             });
@@ -952,6 +956,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
     let (shaders, ids, shader_files) = r.shaders(&file.shaders, base, &guard)?;
     let mut loaded = Loaded {
         scene: Scene {
+            textures: vec![],
             camera,
             background,
             shaders,

@@ -9,13 +9,17 @@ pub mod camera;
 pub mod light;
 pub mod primitives;
 pub mod shading;
+pub mod texture;
 mod validate;
 
 pub use camera::{Camera, Projection};
 pub use light::{Light, LightKind, MAX_LIGHT_SAMPLES};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
 pub use shading::{
-    Checker, ParamField, ParamType, ParamValue, Phong, Shader, ShaderId, WgslShader,
+    Checker, ParamField, ParamType, ParamValue, Phong, PhongTextures, Shader, ShaderId, WgslShader,
+};
+pub use texture::{
+    AlphaMode, Filter, Sampler, SurfaceMaps, Texture, TextureId, TextureRef, UvTransform, Wrap,
 };
 pub use validate::{Invalid, MAX_IMAGE_SIDE};
 
@@ -41,6 +45,8 @@ pub struct Object {
     pub shape: Shape,
     /// Index into [`Scene::shaders`].
     pub shader: ShaderId,
+    /// Normal map, emission and alpha of its material.
+    pub maps: SurfaceMaps,
 }
 
 /// Everything needed to render one image.
@@ -56,6 +62,9 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The lights.
     pub lights: Vec<Light>,
+    /// Images that materials and shaders sample ([`TextureRef::texture`]
+    /// and texture parameters of shader files index them).
+    pub textures: Vec<Texture>,
 }
 
 /// Which kinds of primitive, light and shader a scene uses: the renderer

@@ -13,6 +13,7 @@ use penumbra::scene::{
 fn scene() -> Scene {
     let eye = DVec3::new(0.3, 4.0, 6.0);
     Scene {
+        textures: vec![],
         camera: Camera {
             position: eye,
             orientation: Camera::look_at(eye, DVec3::new(0.0, 1.6, -2.0), DVec3::Y).unwrap(),
@@ -22,6 +23,7 @@ fn scene() -> Scene {
         },
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
+            textures: Default::default(),
             ambient: Vec3::ZERO,
             diffuse: Vec3::ONE,
             specular: Vec3::ZERO,
@@ -30,6 +32,7 @@ fn scene() -> Scene {
         objects: vec![
             // 0: the floor.
             Object {
+                maps: Default::default(),
                 shape: Shape::Plane(Plane {
                     point: DVec3::ZERO,
                     normal: DVec3::Y,
@@ -38,6 +41,7 @@ fn scene() -> Scene {
             },
             // 1: a sphere.
             Object {
+                maps: Default::default(),
                 shape: Shape::Sphere(Sphere {
                     center: DVec3::new(-1.5, 1.0, 0.0),
                     radius: 1.0,
@@ -46,7 +50,11 @@ fn scene() -> Scene {
             },
             // 2: a tilted quad of two triangles, as a mesh.
             Object {
+                maps: Default::default(),
                 shape: Shape::Mesh(Mesh {
+                    uvs: vec![],
+                    colours: None,
+                    tangents: None,
                     positions: vec![
                         DVec3::new(0.5, 0.5, -1.0),
                         DVec3::new(2.5, 0.5, -1.0),

@@ -35,10 +35,12 @@ fn pixel_point(half: f64, px: u32, i: u32, j: u32) -> DVec3 {
 /// A white Lambert plane y = 0 under `lights`.
 fn lambert_plane(camera: Camera, lights: Vec<Light>) -> Scene {
     Scene {
+        textures: vec![],
         camera,
         background: Vec3::ZERO,
         shaders: vec![white_lambert()],
         objects: vec![Object {
+            maps: Default::default(),
             shape: Shape::Plane(Plane {
                 point: DVec3::ZERO,
                 normal: DVec3::Y,
@@ -51,6 +53,7 @@ fn lambert_plane(camera: Camera, lights: Vec<Light>) -> Scene {
 
 fn white_lambert() -> Shader {
     Shader::Phong(Phong {
+        textures: Default::default(),
         ambient: Vec3::ZERO,
         diffuse: Vec3::ONE,
         specular: Vec3::ZERO,
@@ -154,6 +157,7 @@ fn rect_light_converges_to_lamberts_form_factor() {
 fn penumbra_scene(with_occluder: bool) -> Scene {
     let (w, big_h, h, len) = (2.0, 4.0, 2.0, 40.0);
     let mut objects = vec![Object {
+        maps: Default::default(),
         shape: Shape::Plane(Plane {
             point: DVec3::ZERO,
             normal: DVec3::Y,
@@ -168,12 +172,14 @@ fn penumbra_scene(with_occluder: bool) -> Scene {
             DVec3::new(-100.0, h, 100.0),
         );
         objects.push(Object {
+            maps: Default::default(),
             shape: Shape::Triangle(Triangle {
                 vertices: [a, b, c],
             }),
             shader: 0,
         });
         objects.push(Object {
+            maps: Default::default(),
             shape: Shape::Triangle(Triangle {
                 vertices: [a, c, d],
             }),
@@ -181,6 +187,7 @@ fn penumbra_scene(with_occluder: bool) -> Scene {
         });
     }
     Scene {
+        textures: vec![],
         camera: top_down(2.0, 200),
         background: Vec3::ZERO,
         shaders: vec![white_lambert()],

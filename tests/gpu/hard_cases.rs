@@ -9,6 +9,7 @@ use penumbra::scene::{Camera, Mesh, Object, Phong, Projection, Scene, Shader, Sh
 
 fn scene_with(objects: Vec<Object>, eye: DVec3) -> Scene {
     Scene {
+        textures: vec![],
         camera: Camera {
             position: eye,
             orientation: DMat3::IDENTITY,
@@ -18,6 +19,7 @@ fn scene_with(objects: Vec<Object>, eye: DVec3) -> Scene {
         },
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
+            textures: Default::default(),
             ambient: Vec3::ZERO,
             diffuse: Vec3::ONE,
             specular: Vec3::ZERO,
@@ -30,6 +32,7 @@ fn scene_with(objects: Vec<Object>, eye: DVec3) -> Scene {
 
 fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Object {
     Object {
+        maps: Default::default(),
         shape: Shape::Triangle(Triangle {
             vertices: [a, b, c].map(DVec3::from_array),
         }),
@@ -138,6 +141,9 @@ fn icosphere(levels: u32) -> Mesh {
         indices = next;
     }
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: None,
         indices,
@@ -192,6 +198,7 @@ fn leaks(t: TriangleTest, mesh: Mesh, inside: DVec3, spread: f64, n: usize, seed
     }
     let scene = scene_with(
         vec![Object {
+            maps: Default::default(),
             shape: Shape::Mesh(mesh),
             shader: 0,
         }],
@@ -227,6 +234,9 @@ fn cube() -> Mesh {
         .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
         .collect();
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: None,
         indices,
@@ -252,6 +262,9 @@ fn thin_cylinder() -> Mesh {
         indices.extend([[b0, t0, t1], [b0, t1, b1], [bottom, b0, b1], [top, t1, t0]]);
     }
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: None,
         indices,

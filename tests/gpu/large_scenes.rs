@@ -39,6 +39,9 @@ fn grid(n: u32) -> Mesh {
         }
     }
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: None,
         indices,

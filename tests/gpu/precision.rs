@@ -133,6 +133,7 @@ fn sphere_masks(camera: Camera, center: DVec3, radius: f64, margin: f64) -> (usi
     let mut scene = base();
     scene.camera = camera;
     scene.objects = vec![penumbra::scene::Object {
+        maps: Default::default(),
         shape: Shape::Sphere(penumbra::scene::Sphere { center, radius }),
         shader: 0,
     }];

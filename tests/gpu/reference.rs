@@ -131,6 +131,7 @@ fn gpu_vs_reference(
 
 fn lambert(rgb: f32) -> Shader {
     Shader::Phong(Phong {
+        textures: Default::default(),
         ambient: Vec3::ZERO,
         diffuse: Vec3::splat(rgb),
         specular: Vec3::ZERO,
@@ -152,6 +153,7 @@ fn sampling_scene(samples: u32) -> Scene {
         specular: Vec3::ZERO,
     };
     Scene {
+        textures: vec![],
         camera: Camera {
             position: DVec3::new(0.0, 1.0, 0.0),
             orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
@@ -163,6 +165,7 @@ fn sampling_scene(samples: u32) -> Scene {
         shaders: vec![lambert(1.0), lambert(0.5)],
         objects: vec![
             Object {
+                maps: Default::default(),
                 shape: Shape::Plane(Plane {
                     point: DVec3::ZERO,
                     normal: DVec3::Y,
@@ -170,6 +173,7 @@ fn sampling_scene(samples: u32) -> Scene {
                 shader: 0,
             },
             Object {
+                maps: Default::default(),
                 shape: Shape::Triangle(Triangle {
                     vertices: [
                         DVec3::new(-0.4, 0.3, -0.2),

@@ -490,6 +490,7 @@ fn vertex_normals_are_interpolated() {
     };
     let phong = |c: [f32; 3]| Vec3::from_array(c);
     let scene = Scene {
+        textures: vec![],
         camera: Camera {
             position: cam.eye,
             // Looking along −Z with +Y up: the identity rotation.
@@ -500,13 +501,18 @@ fn vertex_normals_are_interpolated() {
         },
         background: Vec3::from_array(BACKGROUND),
         shaders: vec![Shader::Phong(Phong {
+            textures: Default::default(),
             ambient: phong(m.ka),
             diffuse: phong(m.kd),
             specular: phong(m.ks),
             shininess: m.shininess,
         })],
         objects: vec![Object {
+            maps: Default::default(),
             shape: Shape::Mesh(Mesh {
+                uvs: vec![],
+                colours: None,
+                tangents: None,
                 positions: corners.to_vec(),
                 normals: Some(normals.to_vec()),
                 indices: tris.iter().map(|t| t.map(|i| i as u32)).collect(),

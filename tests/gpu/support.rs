@@ -109,6 +109,7 @@ pub fn tagged_bunny_scene() -> Scene {
     scene.lights[0].ambient = Vec3::splat(0.1);
     let phong = |ka: f32| {
         Shader::Phong(Phong {
+            textures: Default::default(),
             ambient: Vec3::splat(ka),
             diffuse: Vec3::splat(0.8),
             specular: Vec3::ZERO,

@@ -875,6 +875,9 @@ fn shade_runs_only_for_samples_above_the_surface_and_the_shading_normal() {
     ];
     let tris = [[0usize, 1, 2], [0, 2, 3]];
     scene.objects[0].shape = penumbra::scene::Shape::Mesh(penumbra::scene::Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions: corners.to_vec(),
         normals: Some(normals.to_vec()),
         indices: tris.iter().map(|t| t.map(|i| i as u32)).collect(),

@@ -77,6 +77,9 @@ pub fn subdivide(mesh: &Mesh) -> Mesh {
         indices.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
     }
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: Some(new_normals),
         indices,
@@ -126,6 +129,9 @@ pub fn bumpy_sphere(rings: u32, centre: DVec3, radius: f64) -> Mesh {
     }
     let normals = vertex_normals(&positions, &indices);
     Mesh {
+        uvs: vec![],
+        colours: None,
+        tangents: None,
         positions,
         normals: Some(normals),
         indices,

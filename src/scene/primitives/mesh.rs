@@ -1,7 +1,7 @@
 //! Indexed triangle mesh, as loaded from glTF (node transforms already
 //! applied, so positions are in world space).
 
-use glam::DVec3;
+use glam::{DVec2, DVec3, DVec4, Vec4};
 
 use super::Triangle;
 
@@ -15,6 +15,15 @@ pub struct Mesh {
     pub normals: Option<Vec<DVec3>>,
     /// Vertex indices, three per triangle.
     pub indices: Vec<[u32; 3]>,
+    /// Texture coordinate sets (`uvs[n]` is glTF's TEXCOORD_n), one entry
+    /// per position each; empty without any.
+    pub uvs: Vec<Vec<DVec2>>,
+    /// Linear RGBA vertex colours (glTF's COLOR_0), one per position.
+    pub colours: Option<Vec<Vec4>>,
+    /// World-space unit tangents with the bitangent's sign in `w` (glTF's
+    /// TANGENT, or generated with MikkTSpace), one per position; present
+    /// where a normal map needs them.
+    pub tangents: Option<Vec<DVec4>>,
 }
 
 impl Mesh {

@@ -14,7 +14,7 @@ pub mod phong;
 pub mod wgsl;
 
 pub use checker::Checker;
-pub use phong::Phong;
+pub use phong::{Phong, PhongTextures};
 pub use wgsl::{
     reflect, Location, ParamField, ParamType, ParamValue, Reflection, ShaderFileError, WgslShader,
 };

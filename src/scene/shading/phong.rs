@@ -2,7 +2,12 @@
 
 use glam::Vec3;
 
+use crate::scene::texture::TextureRef;
+
 /// Ambient, diffuse and specular reflectances and the shininess exponent.
+/// Each reflectance may be scaled by a texture ([`PhongTextures`]), and
+/// the diffuse one by the surface's vertex colours, as glTF's base colour
+/// is (`baseColorFactor × baseColorTexture × COLOR_0`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Phong {
     /// `k_a`, multiplies each light's ambient colour.
@@ -13,6 +18,20 @@ pub struct Phong {
     pub specular: Vec3,
     /// `n_s` ≥ 0, the lobe's exponent.
     pub shininess: f32,
+    /// Textures that multiply the reflectances.
+    pub textures: PhongTextures,
+}
+
+/// The textures (sRGB colour) that multiply [`Phong`]'s reflectances; `None`
+/// leaves a reflectance as it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhongTextures {
+    /// Multiplies `k_a`.
+    pub ambient: Option<TextureRef>,
+    /// Multiplies `k_d` (glTF's base colour texture).
+    pub diffuse: Option<TextureRef>,
+    /// Multiplies `k_s`.
+    pub specular: Option<TextureRef>,
 }
 
 /// Phong's specular lobe `max(0, r·v)^n_s` with `r` the mirror of `l` about

@@ -125,6 +125,7 @@ fn penumbra_counts(r: &mut penumbra::render::Renderer, scene: &Scene) -> anyhow:
         l.ambient = glam::Vec3::splat(0.1);
     }
     tagged.shaders = vec![Shader::Phong(Phong {
+        textures: Default::default(),
         ambient: glam::Vec3::ONE,
         diffuse: glam::Vec3::splat(0.8),
         specular: glam::Vec3::ZERO,

@@ -1,0 +1,450 @@
+//! Textures: images that scale a material's colours, give a surface its
+//! alpha, tilt its normal or make it glow, and how a surface point looks one
+//! up (its sampler, texture coordinates and their transform).
+//!
+//! This module is the one definition of texture sampling; the GPU
+//! (`shaders/textures.wgsl`) and the f64 reference (`crate::reference`)
+//! implement exactly what is written here:
+//!
+//! - **Texels.** A texture is RGBA8, row 0 at the top: texture coordinate
+//!   `v = 0` is the top edge, `v = 1` the bottom (glTF's convention), `u = 0`
+//!   the left edge. Texel `(x, y)` covers `[x, x+1) × [y, y+1)` in texel
+//!   units, so its centre is at `((x + ½)/w, (y + ½)/h)` in uv.
+//! - **Colour space.** Where [`Texture::srgb`] is set (colour textures:
+//!   base colour, diffuse, emission) the RGB of each texel is decoded from
+//!   sRGB to linear ([`srgb_to_linear`]) *before* filtering; alpha and
+//!   non-colour textures (normal maps) are linear.
+//! - **Mip-maps** ([`Texture::mip_chain`]): level `k + 1` is
+//!   `max(1, ⌊w_k/2⌋) × max(1, ⌊h_k/2⌋)`; each of its texels is the mean of
+//!   the 2×2 texels `(2x..2x+1, 2y..2y+1)` of level `k` (clamped to level
+//!   `k`'s last row and column), averaged in linear space and re-encoded to
+//!   8 bits (sRGB textures: to sRGB) with rounding to nearest.
+//! - **Level of detail** λ comes from ray cones (Akenine-Möller et al.,
+//!   "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
+//!   Tracing Gems 2019, ch. 20) for primary hits:
+//!   `λ = log2(W / |n·d|) + ½·log2(A_uv / A_world) + ½·log2(w·h) + log2(s)`
+//!   with `W` the cone's width at the hit (`t·α`, α the angle one pixel
+//!   spans; the pixel's width for orthographic cameras), `n·d` the cosine
+//!   between the geometric normal and the ray, `A_uv/A_world` the ratio of
+//!   the primitive's uv area to its world area, `w·h` the level-0 size and
+//!   `s` the uv scale of the transform (`sqrt|det|` of its 2×2 part).
+//!   Traversal (alpha tests) samples at λ = 0.
+//! - **Filtering.** `λ ≤ 0` magnifies with [`Sampler::mag`]; `λ > 0`
+//!   minifies with [`Sampler::min`] on the level chosen by
+//!   [`Sampler::mip`]: `None` level 0; `Nearest` level `round(λ)`
+//!   (clamped to the chain); `Linear` the blend of levels `⌊λ⌋` and
+//!   `⌊λ⌋ + 1` by `fract(λ)` (clamped). `Nearest` reads the texel that
+//!   contains the point; `Linear` is bilinear between the four texel
+//!   centres around it (OpenGL's rules: `x = u·w − ½`).
+//! - **Wrapping** applies to every texel coordinate separately
+//!   ([`Wrap::apply`]).
+//! - **Transform** ([`UvTransform`]): KHR_texture_transform,
+//!   `uv' = T·R·S·uv` with `R = [[cos r, sin r], [−sin r, cos r]]`.
+
+use std::path::PathBuf;
+
+use glam::{DMat3, DVec2};
+
+/// Index into [`crate::scene::Scene::textures`].
+pub type TextureId = usize;
+
+/// An RGBA8 image, row 0 at the top (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// What it is called in messages: the image file, or the glTF file and
+    /// its field (`Duck.gltf images[0]`).
+    pub label: String,
+    /// The file the texels came from, for `penumbra watch` (`None`:
+    /// embedded in another file).
+    pub file: Option<PathBuf>,
+    /// Width in texels, ≥ 1.
+    pub width: u32,
+    /// Height in texels, ≥ 1.
+    pub height: u32,
+    /// `width × height` texels, row by row from the top.
+    pub texels: Vec<[u8; 4]>,
+    /// RGB is sRGB-encoded (colour textures), decoded to linear before
+    /// filtering; alpha is always linear.
+    pub srgb: bool,
+}
+
+/// One level of a mip chain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MipLevel {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Texels, row by row from the top.
+    pub texels: Vec<[u8; 4]>,
+}
+
+/// sRGB's decoding curve (IEC 61966-2-1) of an 8-bit value, to linear.
+pub fn srgb_to_linear(c: u8) -> f64 {
+    let c = f64::from(c) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// sRGB's encoding curve of a linear value in [0, 1], to 8 bits (rounded).
+pub fn linear_to_srgb8(c: f64) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
+}
+
+impl Texture {
+    /// The mip chain, level 0 first, down to 1×1 (module docs: how each
+    /// level is made).
+    pub fn mip_chain(&self) -> Vec<MipLevel> {
+        let mut levels = vec![MipLevel {
+            width: self.width,
+            height: self.height,
+            texels: self.texels.clone(),
+        }];
+        loop {
+            let prev = levels.last().expect("level 0");
+            if prev.width == 1 && prev.height == 1 {
+                break;
+            }
+            let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
+            let mut texels = Vec::with_capacity((w * h) as usize);
+            for y in 0..h {
+                for x in 0..w {
+                    let mut sum = [0.0f64; 4];
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let sx = (2 * x + dx).min(prev.width - 1);
+                        let sy = (2 * y + dy).min(prev.height - 1);
+                        let t = prev.texels[(sy * prev.width + sx) as usize];
+                        for (c, s) in sum.iter_mut().enumerate() {
+                            *s += if self.srgb && c < 3 {
+                                srgb_to_linear(t[c])
+                            } else {
+                                f64::from(t[c]) / 255.0
+                            };
+                        }
+                    }
+                    texels.push(std::array::from_fn(|c| {
+                        let mean = sum[c] / 4.0;
+                        if self.srgb && c < 3 {
+                            linear_to_srgb8(mean)
+                        } else {
+                            (mean * 255.0).round() as u8
+                        }
+                    }));
+                }
+            }
+            levels.push(MipLevel {
+                width: w,
+                height: h,
+                texels,
+            });
+        }
+        levels
+    }
+
+    /// Bytes of the texture with its whole mip chain on the device.
+    pub fn device_bytes(&self) -> u64 {
+        let (mut w, mut h, mut n) = (u64::from(self.width), u64::from(self.height), 0);
+        loop {
+            n += w * h;
+            if w == 1 && h == 1 {
+                break;
+            }
+            (w, h) = ((w / 2).max(1), (h / 2).max(1));
+        }
+        n * 4
+    }
+}
+
+/// Texel filter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Filter {
+    /// The texel that contains the point.
+    Nearest,
+    /// Bilinear between the four nearest texel centres.
+    #[default]
+    Linear,
+}
+
+/// What a texel coordinate outside the image reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// The image tiles: `x mod n`.
+    #[default]
+    Repeat,
+    /// Every other tile is mirrored.
+    MirroredRepeat,
+    /// The edge texel: `clamp(x, 0, n − 1)`.
+    ClampToEdge,
+}
+
+impl Wrap {
+    /// Texel index `i` (any integer) wrapped into `0..n`.
+    pub fn apply(self, i: i64, n: u32) -> u32 {
+        let n = i64::from(n);
+        let wrapped = match self {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::MirroredRepeat => {
+                let m = i.rem_euclid(2 * n);
+                if m < n {
+                    m
+                } else {
+                    2 * n - 1 - m
+                }
+            }
+            Wrap::ClampToEdge => i.clamp(0, n - 1),
+        };
+        wrapped as u32
+    }
+}
+
+/// How a texture is filtered and wrapped. The default is glTF's usual
+/// choice where a file names none: trilinear, repeating.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Sampler {
+    /// Filter when magnified (λ ≤ 0).
+    pub mag: Filter,
+    /// Filter within a level when minified (λ > 0).
+    pub min: Filter,
+    /// Between mip levels when minified; `None`: level 0 only.
+    pub mip: Option<Filter>,
+    /// Along u (glTF's wrapS).
+    pub wrap_u: Wrap,
+    /// Along v (glTF's wrapT).
+    pub wrap_v: Wrap,
+}
+
+impl Default for Sampler {
+    fn default() -> Self {
+        Sampler {
+            mag: Filter::Linear,
+            min: Filter::Linear,
+            mip: Some(Filter::Linear),
+            wrap_u: Wrap::Repeat,
+            wrap_v: Wrap::Repeat,
+        }
+    }
+}
+
+/// KHR_texture_transform: `uv' = T·R·S·uv`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// Translation T.
+    pub offset: DVec2,
+    /// Rotation r in radians (counter-clockwise in uv).
+    pub rotation: f64,
+    /// Scale S.
+    pub scale: DVec2,
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform {
+            offset: DVec2::ZERO,
+            rotation: 0.0,
+            scale: DVec2::ONE,
+        }
+    }
+}
+
+impl UvTransform {
+    /// The transform as a 3×3 matrix acting on `(u, v, 1)`.
+    pub fn matrix(&self) -> DMat3 {
+        let (s, c) = self.rotation.sin_cos();
+        let t = DMat3::from_cols(
+            glam::DVec3::X,
+            glam::DVec3::Y,
+            glam::DVec3::new(self.offset.x, self.offset.y, 1.0),
+        );
+        // Column-major: R = [[c, s], [-s, c]] as rows.
+        let r = DMat3::from_cols(
+            glam::DVec3::new(c, -s, 0.0),
+            glam::DVec3::new(s, c, 0.0),
+            glam::DVec3::Z,
+        );
+        let sc = DMat3::from_diagonal(glam::DVec3::new(self.scale.x, self.scale.y, 1.0));
+        t * r * sc
+    }
+
+    /// `uv` transformed.
+    pub fn apply(&self, uv: DVec2) -> DVec2 {
+        let m = self.matrix();
+        let p = m * glam::DVec3::new(uv.x, uv.y, 1.0);
+        DVec2::new(p.x, p.y)
+    }
+
+    /// `log2` of the uv scale the transform applies (`½·log2|det S|`): how
+    /// much it shifts the level of detail.
+    pub fn lod_bias(&self) -> f64 {
+        0.5 * (self.scale.x * self.scale.y).abs().log2()
+    }
+}
+
+/// One use of a texture: which texture, sampled how, at which texture
+/// coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`crate::scene::Scene::textures`].
+    pub texture: TextureId,
+    /// Filtering and wrapping.
+    pub sampler: Sampler,
+    /// Which texture coordinates: 0 (`TEXCOORD_0`, [`crate::scene::Mesh::uvs`]
+    /// set 0, and the procedural coordinates of planes and spheres) or 1.
+    pub tex_coord: u32,
+    /// KHR_texture_transform (identity when absent).
+    pub transform: UvTransform,
+}
+
+impl TextureRef {
+    /// A texture with the default sampler on TEXCOORD_0, untransformed.
+    pub fn new(texture: TextureId) -> Self {
+        TextureRef {
+            texture,
+            sampler: Sampler::default(),
+            tex_coord: 0,
+            transform: UvTransform::default(),
+        }
+    }
+}
+
+/// How a surface's alpha (`opacity × texture alpha × vertex alpha`) is used.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// A cut-out: points with alpha below the cutoff are not there, for
+    /// camera and shadow rays alike.
+    Mask {
+        /// glTF's alphaCutoff (default 0.5).
+        cutoff: f32,
+    },
+    /// Stochastic transparency: a ray passes a point with probability
+    /// `1 − alpha`, decided by a hash of the pixel, the sample and the
+    /// primitive, so an image is deterministic for a seed and converges to
+    /// alpha blending with `--spp`.
+    Blend,
+}
+
+/// What a material adds to its shader, the same for every shading model:
+/// the engine applies these (the hit stage tilts the normal, traversal cuts
+/// out, the shade stage adds emission), so user shaders get them too.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceMaps {
+    /// Tangent-space normal map and its `scale` (glTF `normalTexture`).
+    pub normal: Option<(TextureRef, f32)>,
+    /// Linear RGB emitted, added to the colour at the point (glTF
+    /// `emissiveFactor × KHR_materials_emissive_strength`). Not a light.
+    pub emission: glam::Vec3,
+    /// Multiplies [`SurfaceMaps::emission`] (sRGB).
+    pub emission_texture: Option<TextureRef>,
+    /// How alpha is used.
+    pub alpha_mode: AlphaMode,
+    /// Alpha factor (glTF `baseColorFactor`'s alpha).
+    pub opacity: f32,
+    /// The texture whose alpha multiplies [`SurfaceMaps::opacity`] (glTF's
+    /// base colour texture).
+    pub opacity_texture: Option<TextureRef>,
+}
+
+impl Default for SurfaceMaps {
+    fn default() -> Self {
+        SurfaceMaps::NONE
+    }
+}
+
+impl SurfaceMaps {
+    /// No maps, no emission, opaque.
+    pub const NONE: SurfaceMaps = SurfaceMaps {
+        normal: None,
+        emission: glam::Vec3::ZERO,
+        emission_texture: None,
+        alpha_mode: AlphaMode::Opaque,
+        opacity: 1.0,
+        opacity_texture: None,
+    };
+
+    /// Whether any map, emission or alpha is in use.
+    pub fn is_none(&self) -> bool {
+        self.normal.is_none()
+            && self.emission == glam::Vec3::ZERO
+            && self.emission_texture.is_none()
+            && self.alpha_mode == AlphaMode::Opaque
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_modes() {
+        let r: Vec<u32> = (-3..7).map(|i| Wrap::Repeat.apply(i, 3)).collect();
+        assert_eq!(r, [0, 1, 2, 0, 1, 2, 0, 1, 2, 0]);
+        let m: Vec<u32> = (-3..7).map(|i| Wrap::MirroredRepeat.apply(i, 3)).collect();
+        assert_eq!(m, [2, 1, 0, 0, 1, 2, 2, 1, 0, 0]);
+        let c: Vec<u32> = (-3..7).map(|i| Wrap::ClampToEdge.apply(i, 3)).collect();
+        assert_eq!(c, [0, 0, 0, 0, 1, 2, 2, 2, 2, 2]);
+    }
+
+    #[test]
+    fn srgb_round_trips_every_byte() {
+        for b in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb_to_linear(b)), b);
+        }
+        assert!((srgb_to_linear(188) - 0.5).abs() < 0.003);
+    }
+
+    #[test]
+    fn mips_average_in_linear_space() {
+        // Black and white texels average to linear 0.5, which is sRGB 188.
+        let t = Texture {
+            label: "t".into(),
+            file: None,
+            width: 2,
+            height: 1,
+            texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
+            srgb: true,
+        };
+        let chain = t.mip_chain();
+        assert_eq!(chain.len(), 2);
+        assert_eq!((chain[1].width, chain[1].height), (1, 1));
+        assert_eq!(chain[1].texels[0], [188, 188, 188, 128]);
+        assert_eq!(t.device_bytes(), 12);
+        // 5×3 → 2×1 → 1×1.
+        let odd = Texture {
+            width: 5,
+            height: 3,
+            texels: vec![[10, 20, 30, 40]; 15],
+            srgb: false,
+            ..t
+        };
+        let sizes: Vec<_> = odd
+            .mip_chain()
+            .iter()
+            .map(|l| (l.width, l.height))
+            .collect();
+        assert_eq!(sizes, [(5, 3), (2, 1), (1, 1)]);
+    }
+
+    #[test]
+    fn transform_order_is_translate_rotate_scale() {
+        let t = UvTransform {
+            offset: DVec2::new(0.5, 0.0),
+            rotation: std::f64::consts::FRAC_PI_2,
+            scale: DVec2::new(2.0, 1.0),
+        };
+        // S: (1, 0) → (2, 0); R (rows [c s; -s c], r = 90°): (2, 0) → (0, −2); T: (0.5, −2).
+        let p = t.apply(DVec2::new(1.0, 0.0));
+        assert!((p - DVec2::new(0.5, -2.0)).length() < 1e-12, "{p}");
+        assert!((t.lod_bias() - 0.5).abs() < 1e-12);
+    }
+}
