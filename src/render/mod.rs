@@ -141,8 +141,10 @@ pub struct UploadedScene {
     bound: Vec<Bound>,
     /// Tells uploads apart (hit records are reused only for the same one).
     id: u64,
-    /// The scene's shaders, to rebuild the materials after a shader edit.
+    /// The scene's shaders and texture uses, to rebuild the materials
+    /// after a shader edit.
     shaders: Vec<crate::scene::Shader>,
+    texture_uses: Vec<crate::scene::TextureRef>,
     /// Shade programs and parameters.
     materials: Materials,
     /// Light samples per pixel and pass, over all lights.
@@ -662,7 +664,8 @@ impl Renderer {
         self.check_size(width, height, whole)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
-        let materials = Materials::new(&scene.shaders, &self.shaders, false)?;
+        let materials =
+            Materials::new(&scene.shaders, &scene.texture_uses(), &self.shaders, false)?;
         set_leaves(&mut gpu.shaders, &materials);
         let layout = t0.elapsed();
         let t_bvh = Instant::now();
@@ -754,6 +757,7 @@ impl Renderer {
             bound,
             id: self.uploads,
             shaders: scene.shaders.clone(),
+            texture_uses: scene.texture_uses(),
             materials,
             light_samples,
             light_count: gpu.lights.len() as u32,

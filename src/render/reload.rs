@@ -38,7 +38,7 @@ impl Renderer {
             ..self.kernel
         };
         // The shader files' texts (and Params) as they are now.
-        let materials = Materials::new(&scene.shaders, &self.shaders, true)?;
+        let materials = Materials::new(&scene.shaders, &scene.texture_uses, &self.shaders, true)?;
         // The parameter words were uploaded for the Params the files had.
         for (new, old) in materials.programs.iter().zip(&scene.materials.programs) {
             if new.fields != old.fields {

@@ -242,8 +242,11 @@ impl Materials {
     /// through `source`. User files are taken as the scene loaded them
     /// (validated against their parameters), or with `reread` from disk (a
     /// reload after an edit).
+    /// `uses` is the scene's [`crate::scene::Scene::texture_uses`]: a
+    /// texture parameter's word is its index there.
     pub fn new(
         shaders: &[crate::scene::Shader],
+        uses: &[crate::scene::TextureRef],
         source: &ShaderSource,
         reread: bool,
     ) -> Result<Materials, CompileError> {
@@ -289,7 +292,7 @@ impl Materials {
                             message: format!("{PARAMS_CHANGED}: save the scene file to reload it"),
                         });
                     }
-                    w.words()
+                    w.words(|t| crate::scene::Scene::texture_use_index(uses, t))
                 }
                 Shader::Checker(_) => Vec::new(),
             };

@@ -148,6 +148,52 @@ impl Scene {
         f
     }
 
+    /// Every distinct use of a texture (texture, sampler, coordinates,
+    /// transform), in a fixed order: the shaders' textures and texture
+    /// parameters in shader order, then the objects' maps in object order.
+    /// The GPU's table of texture uses and the index a shader file's
+    /// texture parameter receives follow this order.
+    pub fn texture_uses(&self) -> Vec<TextureRef> {
+        let mut uses: Vec<TextureRef> = Vec::new();
+        let mut add = |t: &Option<TextureRef>| {
+            if let Some(t) = t {
+                if !uses.contains(t) {
+                    uses.push(*t);
+                }
+            }
+        };
+        for sh in &self.shaders {
+            match sh {
+                Shader::Phong(p) | Shader::BlinnPhong(p) => {
+                    add(&p.textures.ambient);
+                    add(&p.textures.diffuse);
+                    add(&p.textures.specular);
+                }
+                Shader::Wgsl(w) => {
+                    for v in &w.values {
+                        if let ParamValue::Texture(t) = v {
+                            add(&Some(*t));
+                        }
+                    }
+                }
+                Shader::Checker(_) => {}
+            }
+        }
+        for o in &self.objects {
+            add(&o.maps.normal.map(|(t, _)| t));
+            add(&o.maps.emission_texture);
+            add(&o.maps.opacity_texture);
+        }
+        uses
+    }
+
+    /// Index of `t` in [`Scene::texture_uses`] (`u32::MAX` if absent).
+    pub fn texture_use_index(uses: &[TextureRef], t: &TextureRef) -> u32 {
+        uses.iter()
+            .position(|u| u == t)
+            .map_or(u32::MAX, |i| i as u32)
+    }
+
     /// Number of triangles over all single triangles and meshes.
     pub fn triangle_count(&self) -> usize {
         self.objects

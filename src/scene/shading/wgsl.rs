@@ -98,6 +98,10 @@ pub enum ParamValue {
     U32(u32),
     /// For a `vecN<f32>` member: exactly N components.
     Vec(Vec<f32>),
+    /// For a `u32` member given `{"texture": ...}`: the shader receives
+    /// the index of this use in [`crate::scene::Scene::texture_uses`] and
+    /// samples it with `texture_sample`.
+    Texture(crate::scene::TextureRef),
 }
 
 impl ParamValue {
@@ -106,7 +110,8 @@ impl ParamValue {
         match (self, ty) {
             (ParamValue::F32(_), ParamType::F32)
             | (ParamValue::I32(_), ParamType::I32)
-            | (ParamValue::U32(_), ParamType::U32) => true,
+            | (ParamValue::U32(_), ParamType::U32)
+            | (ParamValue::Texture(_), ParamType::U32) => true,
             (ParamValue::Vec(v), ParamType::Vec2 | ParamType::Vec3 | ParamType::Vec4) => {
                 v.len() == ty.words()
             }
@@ -119,7 +124,7 @@ impl ParamValue {
         match self {
             ParamValue::F32(x) => x.is_finite(),
             ParamValue::Vec(v) => v.iter().all(|x| x.is_finite()),
-            ParamValue::I32(_) | ParamValue::U32(_) => true,
+            ParamValue::I32(_) | ParamValue::U32(_) | ParamValue::Texture(_) => true,
         }
     }
 }
@@ -142,14 +147,17 @@ pub struct WgslShader {
 
 impl WgslShader {
     /// The values packed tightly in field order: `f32`, `i32` and `u32` as
-    /// their bits (one word each), `vecN<f32>` as N `f32` words.
-    pub fn words(&self) -> Vec<u32> {
+    /// their bits (one word each), `vecN<f32>` as N `f32` words, a texture
+    /// as the index `use_index` gives its use (the scene's
+    /// [`crate::scene::Scene::texture_uses`]).
+    pub fn words(&self, use_index: impl Fn(&crate::scene::TextureRef) -> u32) -> Vec<u32> {
         let mut words = Vec::with_capacity(self.fields.iter().map(|f| f.ty.words()).sum());
         for v in &self.values {
             match v {
                 ParamValue::F32(x) => words.push(x.to_bits()),
                 ParamValue::I32(x) => words.push(*x as u32),
                 ParamValue::U32(x) => words.push(*x),
+                ParamValue::Texture(t) => words.push(use_index(t)),
                 ParamValue::Vec(xs) => words.extend(xs.iter().map(|x| x.to_bits())),
             }
         }
@@ -723,7 +731,7 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
         assert!(s.values.iter().zip(&s.fields).all(|(v, f)| v.fits(f.ty)));
         let f = |x: f32| x.to_bits();
         assert_eq!(
-            s.words(),
+            s.words(|_| u32::MAX),
             vec![
                 f(0.9),
                 f(0.3),
