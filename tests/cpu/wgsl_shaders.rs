@@ -95,7 +95,7 @@ fn a_wgsl_shader_loads_with_its_params_packed_in_field_order() {
     let mut expected = bits(&[0.9, 0.3, 0.2]);
     expected.push(4);
     expected.extend(bits(&[1.5]));
-    assert_eq!(w.words(), expected);
+    assert_eq!(w.words(|_| u32::MAX), expected);
     // The watcher reloads when the shader file changes.
     assert_eq!(loaded.files, vec![path, dir.path().join("toon.wgsl")]);
     // A WGSL shader is no built-in kernel feature.
@@ -112,7 +112,7 @@ fn a_file_without_params_needs_none() {
         let (_dir, _path, loaded) = load(&scene(json!({"n": toon}), &["n"]), &["plain.wgsl"]);
         let w = wgsl(&loaded.scene.shaders[0]);
         assert!(w.fields.is_empty() && w.values.is_empty() && !w.has_ambient);
-        assert!(w.words().is_empty());
+        assert!(w.words(|_| u32::MAX).is_empty());
     }
 }
 
