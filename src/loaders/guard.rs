@@ -164,6 +164,22 @@ impl Guard {
         Ok(())
     }
 
+    /// Admits `bytes` of decoded data (texture texels), or refuses them
+    /// when the scene would then exceed the memory budget.
+    pub fn charge_bytes(&self, bytes: u64) -> Result<(), Refused> {
+        let total = self.bytes.get().saturating_add(bytes);
+        if total > self.max_bytes {
+            return Err(Refused(format!(
+                "the scene would need {} ({total} bytes) with this image, more than the scene memory budget of {} ({} bytes, --max-scene-memory)",
+                mib(total),
+                mib(self.max_bytes),
+                self.max_bytes
+            )));
+        }
+        self.bytes.set(total);
+        Ok(())
+    }
+
     /// Bytes charged so far (files read and geometry admitted).
     pub fn bytes(&self) -> u64 {
         self.bytes.get()

@@ -40,6 +40,38 @@
 //!   ([`Wrap::apply`]).
 //! - **Transform** ([`UvTransform`]): KHR_texture_transform,
 //!   `uv' = T·R·S·uv` with `R = [[cos r, sin r], [−sin r, cos r]]`.
+//!
+//! What a surface point's texture coordinates, colour and normal are:
+//!
+//! - **Triangles** interpolate their vertices' uv sets, colours and tangents
+//!   with the barycentrics `(1 − u − v, u, v)`; without a set, uv is (0, 0),
+//!   without colours the colour is (1, 1, 1, 1).
+//! - **Planes** have planar coordinates in world units: with `a = (0, 0, −1)`
+//!   where `|n_y| > 0.999`, else `a = (0, 1, 0)`, the axes are
+//!   `e_u = normalize(a × n)` and `e_v = e_u × n`, and
+//!   `uv = (p·e_u, p·e_v)` for the world point `p`. The ground plane
+//!   `n = +Y` thus has `u = x`, `v = z`; a wall facing +Z has `u = x`,
+//!   `v = −y` (upright seen from the front). `A_uv/A_world = 1`.
+//! - **Spheres** have latitude-longitude coordinates: with
+//!   `d = (p − centre)/r`, `u = ½ − atan2(d_z, d_x)/(2π)` and
+//!   `v = acos(d_y)/π` (v = 0 at the +Y pole, the seam at −X, u growing
+//!   to the right seen from outside); `A_uv/A_world = 1/(2π² r² sin θ)`
+//!   with `sin θ = max(sqrt(1 − d_y²), 1e-4)`.
+//! - **Normal maps**: the texel's `t = 2·rgb − 1` scaled to
+//!   `(t_x·s, t_y·s, t_z)` (glTF's `scale` s) and normalised; with the
+//!   interpolated shading normal `n` (before it is turned to face the
+//!   viewer) and tangent `(T, w)`: `T' = normalize(T − n(n·T))`,
+//!   `B = w·(n × T')`, the new normal `normalize(t_x·T' + t_y·B + t_z·n)`,
+//!   then turned to face the viewer like any shading normal. It is sampled
+//!   at the primary hit's λ.
+//! - **Emission** `emission × texture.rgb` is added once to each sample's
+//!   colour, with the ambient terms; shadows do not dim it.
+//! - **Alpha** `opacity × opacity_texture.a × colour.a` is tested in
+//!   traversal, for camera and shadow rays alike, at λ = 0 (the mag filter).
+//!   A `Mask` point is there when alpha ≥ cutoff; a `Blend` point when
+//!   alpha > ξ with `ξ = unit_float(hash3(pixel, primitive, seed ^ stream))`
+//!   (`crate::reference::sampling`), the stream `0x0b1e_0000 + pass` for
+//!   camera rays and `0x0b1f_0000 + pass` for shadow rays.
 
 use std::path::PathBuf;
 
