@@ -23,9 +23,12 @@
 //!   "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
 //!   Tracing Gems 2019, ch. 20) for primary hits:
 //!   `λ = log2(W / |n·d|) + ½·log2(A_uv / A_world) + ½·log2(w·h) + log2(s)`
-//!   with `W` the cone's width at the hit (`t·α`, α the angle one pixel
-//!   spans; the pixel's width for orthographic cameras), `n·d` the cosine
-//!   between the geometric normal and the ray, `A_uv/A_world` the ratio of
+//!   with `W` the cone's width at the hit: `t·α` for a perspective camera,
+//!   `t` the distance along the unit ray and `α = 2·tan(vfov/2)/height` the
+//!   angle one pixel spans (the small-angle form); the pixel's world height
+//!   `2·half_height/height` for an orthographic one. `n·d` is the cosine
+//!   between the geometric normal and the ray (its magnitude clamped to at
+//!   least 1e-6), `A_uv/A_world` the ratio of
 //!   the primitive's uv area to its world area, `w·h` the level-0 size and
 //!   `s` the uv scale of the transform (`sqrt|det|` of its 2×2 part).
 //!   Traversal (alpha tests) samples at λ = 0.
