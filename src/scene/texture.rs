@@ -29,14 +29,18 @@
 //!   `2·half_height/height` for an orthographic one. `n·d` is the cosine
 //!   between the geometric normal and the ray (its magnitude clamped to at
 //!   least 1e-6), `A_uv/A_world` the ratio of
-//!   the primitive's uv area to its world area, `w·h` the level-0 size and
+//!   the primitive's uv area to its world area in the use's uv set, before
+//!   the transform (a triangle's
+//!   `|(uv₁ − uv₀) × (uv₂ − uv₀)| / |(p₁ − p₀) × (p₂ − p₀)|`; zero uv area
+//!   gives λ = −∞, magnification), `w·h` the level-0 size and
 //!   `s` the uv scale of the transform (`sqrt|det|` of its 2×2 part).
-//!   Traversal (alpha tests) samples at λ = 0.
+//!   Every texture of a primary hit (Phong textures, normal map, emission)
+//!   is sampled at that hit's λ; traversal (alpha tests) samples at λ = 0.
 //! - **Filtering.** `λ ≤ 0` magnifies with [`Sampler::mag`]; `λ > 0`
 //!   minifies with [`Sampler::min`] on the level chosen by
-//!   [`Sampler::mip`]: `None` level 0; `Nearest` level `round(λ)`
-//!   (clamped to the chain); `Linear` the blend of levels `⌊λ⌋` and
-//!   `⌊λ⌋ + 1` by `fract(λ)` (clamped). `Nearest` reads the texel that
+//!   [`Sampler::mip`]: `None` level 0; `Nearest` level `round(λ)`, ties
+//!   to even as WGSL's `round` (clamped to the chain); `Linear` the blend
+//!   of levels `⌊λ⌋` and `⌊λ⌋ + 1` by `fract(λ)` (clamped). `Nearest` reads the texel that
 //!   contains the point; `Linear` is bilinear between the four texel
 //!   centres around it (OpenGL's rules: `x = u·w − ½`).
 //! - **Wrapping** applies to every texel coordinate separately
@@ -63,18 +67,28 @@
 //! - **Normal maps**: the texel's `t = 2·rgb − 1` scaled to
 //!   `(t_x·s, t_y·s, t_z)` (glTF's `scale` s) and normalised; with the
 //!   interpolated shading normal `n` (before it is turned to face the
-//!   viewer) and tangent `(T, w)`: `T' = normalize(T − n(n·T))`,
+//!   viewer) and the interpolated tangent `(T, w)` (both as interpolated,
+//!   not renormalised before this formula): `T' = normalize(T − n(n·T))`,
 //!   `B = w·(n × T')`, the new normal `normalize(t_x·T' + t_y·B + t_z·n)`,
 //!   then turned to face the viewer like any shading normal. It is sampled
-//!   at the primary hit's λ.
+//!   at the primary hit's λ. Only meshes with [`crate::scene::Mesh::tangents`]
+//!   can have a normal map (`Scene::validate` refuses it elsewhere).
 //! - **Emission** `emission × texture.rgb` is added once to each sample's
 //!   colour, with the ambient terms; shadows do not dim it.
 //! - **Alpha** `opacity × opacity_texture.a × colour.a` is tested in
 //!   traversal, for camera and shadow rays alike, at λ = 0 (the mag filter).
 //!   A `Mask` point is there when alpha ≥ cutoff; a `Blend` point when
 //!   alpha > ξ with `ξ = unit_float(hash3(pixel, primitive, seed ^ stream))`
-//!   (`crate::reference::sampling`), the stream `0x0b1e_0000 + pass` for
-//!   camera rays and `0x0b1f_0000 + pass` for shadow rays.
+//!   (`crate::reference::sampling`: `unit_float(h) = (h >> 8)·2⁻²⁴`,
+//!   `pixel = y·width + x`), the stream `0x0b1e_0000 + pass` for
+//!   camera rays and `0x0b1f_0000 + pass` for shadow rays (one ξ for all
+//!   lights and light samples of a pass). `primitive` is the index in the
+//!   primitive's own list as the GPU lays them out
+//!   (`render::layout::primitives`): a triangle's over all triangles
+//!   (objects in order, each mesh's triangles in order), a sphere's among
+//!   the spheres, a plane's among the planes. Every intersection along a
+//!   ray is tested, a sphere's far side too where its near side is not
+//!   there.
 
 use std::path::PathBuf;
 
