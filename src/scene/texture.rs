@@ -82,13 +82,12 @@
 //!   (`crate::reference::sampling`: `unit_float(h) = (h >> 8)·2⁻²⁴`,
 //!   `pixel = y·width + x`), the stream `0x0b1e_0000 + pass` for
 //!   camera rays and `0x0b1f_0000 + pass` for shadow rays (one ξ for all
-//!   lights and light samples of a pass). `primitive` is the index in the
-//!   primitive's own list as the GPU lays them out
-//!   (`render::layout::primitives`): a triangle's over all triangles
-//!   (objects in order, each mesh's triangles in order), a sphere's among
-//!   the spheres, a plane's among the planes. Every intersection along a
-//!   ray is tested, a sphere's far side too where its near side is not
-//!   there.
+//!   lights and light samples of a pass). `primitive` is the
+//!   triangle's index over all triangles as the GPU lays them out
+//!   (`render::layout::primitives`: objects in order, each mesh's
+//!   triangles in order). Only meshes and triangles can be cut out:
+//!   `Scene::validate` refuses an alpha mode other than `Opaque` on planes
+//!   and spheres (glTF, where alpha comes from, has only triangles).
 
 use std::path::PathBuf;
 
