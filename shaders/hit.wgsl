@@ -18,6 +18,12 @@ struct Hit {
     shader: u32,
     // Index of the scene object the primitive belongs to.
     object: u32,
+    // Triangles: the barycentrics (u, v) again; planes and spheres: their
+    // texture coordinates (surface.wgsl).
+    coords: vec2<f32>,
+    // The geometric level of detail of texture coordinate sets 0 and 1
+    // (scenes with textures only; surface.wgsl).
+    lambda: vec2<f32>,
 }
 
 // Nearest hit over every primitive kind the scene has: planes one by one
@@ -71,8 +77,9 @@ fn closest_sphere(i: u32, ray: Ray, hit: ptr<function, Hit>) {
 
 // Records triangle `i` in `hit` if the ray meets it nearer.
 fn closest_triangle(i: u32, ray: Ray, hit: ptr<function, Hit>) {
-    let h = intersect_triangle(triangle(i), ray, (*hit).t);
-    if h.x > 0.0 {
+    let tri = triangle(i);
+    let h = intersect_triangle(tri, ray, (*hit).t);
+    if h.x > 0.0 && triangle_is_there(i, tri, h.yz) {
         (*hit).found = true;
         (*hit).t = h.x;
         (*hit).kind = KIND_TRIANGLE;
@@ -110,6 +117,11 @@ fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
             (*hit).shader = tri.shader;
             (*hit).object = tri.object;
         }
+    }
+    (*hit).position = p;
+    surface_coords(ray, hit, ng);
+    if HAS_NORMAL_MAPS && (*hit).kind == KIND_TRIANGLE {
+        ns = normal_mapped(*hit, ns);
     }
     if dot(ng, ray.dir) > 0.0 {
         ng = -ng;

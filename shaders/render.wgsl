@@ -21,6 +21,12 @@ override HAS_DIRECTIONAL: bool = true;
 override HAS_POINT: bool = true;
 override HAS_SPOT: bool = true;
 override HAS_CHECKER: bool = true;
+// Textures (scene::Features): level of detail, vertex attributes, normal
+// maps, alpha cut-outs in traversal.
+override HAS_TEXTURES: bool = true;
+override HAS_ATTRIBUTES: bool = true;
+override HAS_NORMAL_MAPS: bool = true;
+override HAS_ALPHA_TESTS: bool = true;
 // Kernel variants chosen by the user (render::KernelOptions).
 override USE_BVH: bool = true;
 override TRIANGLE_TEST: u32 = 0u;
@@ -89,6 +95,10 @@ const FLAG_FRESH: u32 = 2u;
 // This dispatch shades the last chunk of light samples: the shade stage
 // writes the pixel's colour to the image (earlier chunks sum in `radiance`).
 const FLAG_LAST_CHUNK: u32 = 4u;
+// The shade stage interpolates triangles' vertex attributes
+// (attributes.wgsl); it adds the objects' emission (surface_maps.wgsl).
+const FLAG_ATTRIBUTES: u32 = 8u;
+const FLAG_EMISSION: u32 = 16u;
 
 // Farther than anything in a scene; used as "no hit yet" and as the length
 // of shadow rays towards directional lights.

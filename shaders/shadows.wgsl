@@ -97,5 +97,7 @@ fn triangle_blocks(i: u32, ray: Ray, t_max: f32, start: Hit) -> bool {
     if start.kind == KIND_TRIANGLE && start.index == i {
         return false;
     }
-    return intersect_triangle(triangle(i), ray, t_max).x > 0.0;
+    let tri = triangle(i);
+    let h = intersect_triangle(tri, ray, t_max);
+    return h.x > 0.0 && triangle_is_there(i, tri, h.yz);
 }

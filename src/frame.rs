@@ -73,6 +73,9 @@ pub struct RenderStats {
     pub tiles: usize,
     /// See [`RenderStats::tiles`].
     pub stage_bytes: u64,
+    /// Bytes of the scene's textures on the device, mip chains included
+    /// (0 without textures).
+    pub texture_bytes: u64,
 }
 
 impl RenderStats {

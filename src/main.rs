@@ -717,10 +717,21 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
                 ("readback", t.readback),
                 ("write", write),
             ],
-            &width_note,
+            &format!("{width_note}{}", texture_note(s)),
         )
     );
     Ok(())
+}
+
+/// ` | textures N MiB (mip-maps included)` for a scene with textures.
+fn texture_note(s: &penumbra::frame::RenderStats) -> String {
+    if s.texture_bytes == 0 {
+        return String::new();
+    }
+    format!(
+        " | textures {:.2} MiB (mip-maps included)",
+        s.texture_bytes as f64 / 1048576.0
+    )
 }
 
 /// `penumbra render --batch LIST -o DIR`: every scene of the list with one

@@ -6,6 +6,10 @@ struct Plane {
     shader: u32,
     normal: vec3<f32>,
     object: u32,
+    // Texture coordinates at `point` (world units along the plane's axes,
+    // computed in f64 on the host: surface.wgsl).
+    uv_origin: vec2<f32>,
+    _pad: vec2<u32>,
 }
 
 @group(0) @binding(1) var<storage, read> planes: array<Plane>;

@@ -8,6 +8,20 @@ struct Params {
     diffuse: vec3<f32>,
     specular: vec3<f32>,
     shininess: f32,
+    // Textures that scale the reflectances (0xffffffffu: none).
+    ambient_texture: u32,
+    diffuse_texture: u32,
+    specular_texture: u32,
+}
+
+// Once per point: the textures and the vertex colour scale the
+// reflectances (glTF's base colour is factor × texture × COLOR_0).
+fn prepare(s: Surface, p: Params) -> Params {
+    var q = p;
+    q.ambient = p.ambient * texture_at(p.ambient_texture, s).rgb;
+    q.diffuse = p.diffuse * texture_at(p.diffuse_texture, s).rgb * s.colour.rgb;
+    q.specular = p.specular * texture_at(p.specular_texture, s).rgb;
+    return q;
 }
 
 fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {

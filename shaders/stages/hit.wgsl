@@ -26,14 +26,16 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             sub = sample_2d(pixel, 0u, push.pass_index);
         }
         let ray = primary_ray(globals.camera, px, push.size, sub);
+        alpha_pixel = pixel;
+        alpha_stream = 0x0b1e0000u + push.pass_index;
         let hit = closest_hit(ray);
         let slot = tile_slot(px);
         if hit.found {
             textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(bitcast<vec3<u32>>(hit.position), hit.kind));
             textureStore(hit_records_out, record_texel(slot, 1u), vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
             textureStore(hit_records_out, record_texel(slot, 2u), vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
-            textureStore(hit_records_out, record_texel(slot, 3u), vec4<u32>(bitcast<vec3<u32>>(-ray.dir), 0u));
-            textureStore(hit_records_out, record_texel(slot, 4u), vec4<u32>(0u));
+            textureStore(hit_records_out, record_texel(slot, 3u), vec4<u32>(bitcast<vec3<u32>>(-ray.dir), hit.object));
+            textureStore(hit_records_out, record_texel(slot, 4u), vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
             resolve_material(slot, hit);
         } else {
             textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(0u, 0u, 0u, KIND_NONE));

@@ -21,8 +21,11 @@ const KIND_NONE: u32 = 0xffffffffu;
 //   0: position (camera-relative), kind (KIND_NONE: the ray hit nothing)
 //   1: unit geometric normal facing the viewer, primitive index
 //   2: unit shading normal facing the viewer, the scene's shader
-//   3: unit vector to the eye, 0
-//   4: texture coordinates ((0, 0) where the primitive has none), 0, 0
+//   3: unit vector to the eye, the scene object
+//   4: triangles: the barycentrics (u, v), which the shade stage
+//      interpolates vertex attributes with; planes and spheres: their
+//      texture coordinates (surface.wgsl); then the geometric level of
+//      detail of texture coordinate sets 0 and 1 (0 without textures)
 const RECORD_TEXELS: u32 = 5u;
 // Material resolve's result (1 texel a record at binding 16): the leaf
 // shader, its program, the first of its parameter words, 0.

@@ -2,8 +2,10 @@
 // file with shading/interface.wgsl, the shader file, and the parameter
 // loader it generates from the file's `struct Params` (src/render/shade.rs):
 //   fn penumbra_load_params(at: u32) -> Params
+//   fn penumbra_prepare(s: Surface, p: Params) -> Params
 //   fn penumbra_ambient_sum(s: Surface, p: Params) -> vec3<f32>
-// (the sum of the file's `ambient` over the lights, or 0 without one)
+// (the file's `prepare`, or `p` unchanged without one; the sum of the
+// file's `ambient` over the lights, or 0 without one)
 // Every name here starts with `penumbra_`, so no shader file can collide
 // with the engine. The stage traces nothing: it sums the shader's ambient
 // term of every light and its `shade` of every queued light sample that
@@ -50,6 +52,12 @@ var<immediate> penumbra_push: penumbra_PushConstants;
 const penumbra_FLAG_WARM_UP: u32 = 1u;
 const penumbra_FLAG_FRESH: u32 = 2u;
 const penumbra_FLAG_LAST_CHUNK: u32 = 4u;
+// The scene has vertex attributes to interpolate (attributes.wgsl) and
+// surface maps with emission (surface_maps.wgsl); render.wgsl's
+// FLAG_ATTRIBUTES and FLAG_EMISSION.
+const penumbra_FLAG_ATTRIBUTES: u32 = 8u;
+const penumbra_FLAG_EMISSION: u32 = 16u;
+const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
 const penumbra_QUEUE_TEXELS: u32 = 1u;
@@ -81,17 +89,38 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if t0.w == penumbra_KIND_NONE || material.y != push.program {
         return;
     }
-    let ng = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 1u)));
+    let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
     let ns = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 2u)));
-    let to_eye = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 3u)));
-    let uv = bitcast<vec2<f32>>(textureLoad(penumbra_hit_records, penumbra_texel(r + 4u)).xy);
-    let s = Surface(penumbra_f3(t0), ns, ng, to_eye, uv);
-    let p = penumbra_load_params(material.z);
+    let t3 = textureLoad(penumbra_hit_records, penumbra_texel(r + 3u));
+    let t4 = textureLoad(penumbra_hit_records, penumbra_texel(r + 4u));
+    // Texture coordinates and colour: a triangle's interpolated from its
+    // vertices, a plane's or sphere's as the hit stage computed them.
+    var uv = bitcast<vec2<f32>>(t4.xy);
+    var uv1 = uv;
+    var vertex_colour = vec4<f32>(1.0);
+    if t0.w == penumbra_KIND_TRIANGLE {
+        uv = vec2<f32>(0.0);
+        uv1 = uv;
+        if (push.flags & penumbra_FLAG_ATTRIBUTES) != 0u {
+            let bary = bitcast<vec2<f32>>(t4.xy);
+            let uvs = penumbra_triangle_uvs(t1.w);
+            uv = penumbra_triangle_uv(uvs, 0u, bary);
+            uv1 = penumbra_triangle_uv(uvs, 1u, bary);
+            vertex_colour = penumbra_triangle_colour(t1.w, bary);
+        }
+    }
+    penumbra_lod = bitcast<vec2<f32>>(t4.zw);
+    let s = Surface(penumbra_f3(t0), ns, penumbra_f3(t1), penumbra_f3(t3), uv, uv1, vertex_colour);
+    let p = penumbra_prepare(s, penumbra_load_params(material.z));
     // The ambient terms with the first chunk of samples, then the samples
     // that reached the point (the shadow stage zeroed the others' falloff).
     var colour: vec3<f32>;
     if push.sample_first == 0u {
         colour = penumbra_ambient_sum(s, p);
+        if (push.flags & penumbra_FLAG_EMISSION) != 0u {
+            let m = penumbra_surface_map(t3.w, 0u);
+            colour += penumbra_f3(m) * texture_at(m.w, s).rgb;
+        }
     } else {
         colour = penumbra_radiance[slot].xyz;
     }

@@ -35,6 +35,8 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             shading_normal = bitcast<vec3<f32>>(textureLoad(hit_records, record_texel(slot, 2u)).xyz);
         }
         let pixel = px.y * push.size.x + px.x;
+        alpha_pixel = pixel;
+        alpha_stream = 0x0b1f0000u + push.pass_index;
         let base = slot * push.sample_count;
         let first = push.sample_first;
         let end = first + push.sample_count;

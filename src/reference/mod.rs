@@ -281,6 +281,7 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
             bvh_nodes: world.accel.node_count(),
             bvh_depth: world.accel.depth,
             bvh_bytes: 0,
+            texture_bytes: 0,
             timings: Timings {
                 accel_build,
                 render,

@@ -567,7 +567,7 @@ pub fn setting_values(s: &Settings) -> [(&'static str, bool); 2] {
 pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPSILON", "SAMPLER"];
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 9] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -578,6 +578,10 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 9] {
         ("HAS_SPOT", f.spot_lights),
         ("HAS_CHECKER", f.checker),
         ("HAS_AREA_LIGHTS", f.area_lights),
+        ("HAS_TEXTURES", f.textures),
+        ("HAS_ATTRIBUTES", f.attributes),
+        ("HAS_NORMAL_MAPS", f.normal_maps),
+        ("HAS_ALPHA_TESTS", f.alpha_tests),
     ]
 }
 
@@ -667,6 +671,10 @@ mod tests {
             blinn_phong: true,
             checker: true,
             area_lights: true,
+            textures: true,
+            attributes: true,
+            normal_maps: true,
+            alpha_tests: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [
@@ -730,11 +738,11 @@ mod tests {
                 ],
             ),
             (
-                &[("@binding(3) var triangles", "@binding(20) var triangles")],
+                &[("@binding(3) var triangles", "@binding(24) var triangles")],
                 [
                     "triangle.wgsl:",
                     "`triangles`",
-                    "@binding(20)",
+                    "@binding(24)",
                     "texel image",
                     "binds nothing",
                 ],

@@ -145,6 +145,11 @@ pub struct UploadedScene {
     /// after a shader edit.
     shaders: Vec<crate::scene::Shader>,
     texture_uses: Vec<crate::scene::TextureRef>,
+    /// [`layout::FLAG_ATTRIBUTES`] and [`layout::FLAG_EMISSION`] as the
+    /// scene needs them.
+    shade_flags: u32,
+    /// Bytes of textures with their mip chains on the device.
+    texture_bytes: u64,
     /// Shade programs and parameters.
     materials: Materials,
     /// Light samples per pixel and pass, over all lights.
@@ -727,6 +732,16 @@ impl Renderer {
                 "light colours",
                 bytemuck::cast_slice(&light_colours(lights)),
             )?,
+            texels("texture texels", bytemuck::cast_slice(&gpu.textures.texels))?,
+            texels("texture uses", bytemuck::cast_slice(&gpu.textures.uses))?,
+            texels(
+                "surface maps",
+                bytemuck::cast_slice(&gpu.textures.surface_maps),
+            )?,
+            texels(
+                "vertex attributes",
+                bytemuck::cast_slice(&gpu.textures.attributes),
+            )?,
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds
@@ -758,6 +773,8 @@ impl Renderer {
             id: self.uploads,
             shaders: scene.shaders.clone(),
             texture_uses: scene.texture_uses(),
+            shade_flags: layout::shade_flags(scene),
+            texture_bytes: gpu.textures.texture_bytes,
             materials,
             light_samples,
             light_count: gpu.lights.len() as u32,
@@ -1057,7 +1074,7 @@ impl Renderer {
                 size: [width, height],
                 pass_index: first_pass + passes,
                 seed: sampling.seed,
-                flags: if passes == 0 { FLAG_FRESH } else { 0 },
+                flags: scene.shade_flags | if passes == 0 { FLAG_FRESH } else { 0 },
                 light_count,
                 ..Zeroable::zeroed()
             };
@@ -1215,6 +1232,7 @@ impl Renderer {
                     bvh_nodes: scene.bvh_nodes,
                     bvh_depth: scene.bvh_depth,
                     bvh_bytes: scene.bvh_bytes,
+                    texture_bytes: scene.texture_bytes,
                     hits_reused: reuse,
 
                     tiles: tiles.len(),

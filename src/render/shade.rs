@@ -100,7 +100,7 @@ pub fn assemble(
     let has_ambient = declared.has_ambient;
     assembled.push_file(
         format!("(penumbra's parameter loader for {label})"),
-        &generated(&fields, has_ambient, placeholder),
+        &generated(&fields, has_ambient, declared.has_prepare, placeholder),
     );
     Ok(ShadeSource {
         assembled,
@@ -133,7 +133,12 @@ fn file_error(e: ShaderFileError) -> CompileError {
 
 /// The loader of `Params` from the packed words, and the sum of the
 /// file's `ambient` over the lights.
-fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> String {
+fn generated(
+    fields: &[ParamField],
+    has_ambient: bool,
+    has_prepare: bool,
+    placeholder: bool,
+) -> String {
     let mut out = String::new();
     // `at` is the first texel of the material's words (4-word aligned), so
     // each word's texel and component are known here.
@@ -181,6 +186,11 @@ fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> Str
         out,
         "fn penumbra_ambient_sum(s: Surface, p: Params) -> vec3<f32> {{\n{sum}\n}}"
     );
+    let prepare = if has_prepare { "prepare(s, p)" } else { "p" };
+    let _ = writeln!(
+        out,
+        "fn penumbra_prepare(s: Surface, p: Params) -> Params {{\n    return {prepare};\n}}"
+    );
     out
 }
 
@@ -190,20 +200,30 @@ fn generated(fields: &[ParamField], has_ambient: bool, placeholder: bool) -> Str
 pub fn phong_words(
     fields: &[ParamField],
     p: &crate::scene::Phong,
+    uses: &[crate::scene::TextureRef],
     label: &str,
 ) -> Result<Vec<u32>, CompileError> {
     let mut words = Vec::new();
     for ParamField { name, ty: kind } in fields {
+        let texture = |t: &Option<crate::scene::TextureRef>| {
+            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
+                crate::scene::Scene::texture_use_index(uses, t)
+            });
+            vec![f32::from_bits(index)]
+        };
         let value: Vec<f32> = match (name.as_str(), kind) {
             ("ambient", ParamType::Vec3) => p.ambient.to_array().to_vec(),
             ("diffuse", ParamType::Vec3) => p.diffuse.to_array().to_vec(),
             ("specular", ParamType::Vec3) => p.specular.to_array().to_vec(),
             ("shininess", ParamType::F32) => vec![p.shininess],
+            ("ambient_texture", ParamType::U32) => texture(&p.textures.ambient),
+            ("diffuse_texture", ParamType::U32) => texture(&p.textures.diffuse),
+            ("specular_texture", ParamType::U32) => texture(&p.textures.specular),
             _ => {
                 return Err(CompileError {
                     location: label.to_string(),
                     message: format!(
-                        "Params field `{name}: {}` is not one of the built-in shader's fields (ambient, diffuse, specular: vec3<f32>; shininess: f32)",
+                        "Params field `{name}: {}` is not one of the built-in shader's fields (ambient, diffuse, specular: vec3<f32>; shininess: f32; ambient_texture, diffuse_texture, specular_texture: u32)",
                         kind.wgsl()
                     ),
                 })
@@ -281,7 +301,7 @@ impl Materials {
             let label = file.label();
             let words = match sh {
                 Shader::Phong(p) | Shader::BlinnPhong(p) => {
-                    phong_words(&m.programs[program].fields, p, &label)?
+                    phong_words(&m.programs[program].fields, p, uses, &label)?
                 }
                 Shader::Wgsl(w) => {
                     // The scene's values were checked against the Params the
@@ -323,7 +343,10 @@ mod tests {
                     ("ambient", ParamType::Vec3),
                     ("diffuse", ParamType::Vec3),
                     ("specular", ParamType::Vec3),
-                    ("shininess", ParamType::F32)
+                    ("shininess", ParamType::F32),
+                    ("ambient_texture", ParamType::U32),
+                    ("diffuse_texture", ParamType::U32),
+                    ("specular_texture", ParamType::U32)
                 ]
             );
             assert!(s.has_ambient);

@@ -51,6 +51,11 @@ shader_files![
     "shading/interface.wgsl",
     "shading/phong.wgsl",
     "shading/blinn_phong.wgsl",
+    "textures.wgsl",
+    "attributes.wgsl",
+    "surface_maps.wgsl",
+    "surface.wgsl",
+    "alpha.wgsl",
 ];
 
 /// The embedded copy of shader file `name` (a name of [`SHADER_FILES`]).
@@ -72,6 +77,12 @@ const BASE: &[&str] = &[
 
 /// Files of closest-hit and any-hit traversal (the BVH walks both).
 const TRAVERSAL: &[&str] = &[
+    "textures.wgsl",
+    "attributes.wgsl",
+    "surface_maps.wgsl",
+    "surface.wgsl",
+    "alpha.wgsl",
+    "sampling.wgsl",
     "hit.wgsl",
     "primitives/plane.wgsl",
     "primitives/sphere.wgsl",
@@ -121,14 +132,13 @@ impl Stage {
     pub fn files(self) -> Vec<&'static str> {
         let own: &[&str] = match self {
             Stage::Hit => &[
-                "sampling.wgsl",
                 "aov.wgsl",
                 "shading/shader.wgsl",
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
                 "stages/hit.wgsl",
             ],
-            Stage::Shadow => &["lights.wgsl", "sampling.wgsl", "stages/shadow.wgsl"],
+            Stage::Shadow => &["lights.wgsl", "stages/shadow.wgsl"],
             Stage::Trace => &["queries.wgsl"],
         };
         let traversal = matches!(self, Stage::Hit | Stage::Shadow | Stage::Trace);
@@ -158,7 +168,13 @@ pub fn engine_files() -> Vec<&'static str> {
 
 /// The files a shade pipeline is compiled with, before the shader file
 /// itself and the generated parameter loader ([`super::shade`]).
-pub const SHADE_PRELUDE: &[&str] = &["shading/interface.wgsl", "stages/shade.wgsl"];
+pub const SHADE_PRELUDE: &[&str] = &[
+    "textures.wgsl",
+    "attributes.wgsl",
+    "surface_maps.wgsl",
+    "shading/interface.wgsl",
+    "stages/shade.wgsl",
+];
 
 /// The bindings of set 0: what each holds, the name the engine's WGSL gives
 /// it (the shade stage's are prefixed `penumbra_`), and its type. Every
@@ -205,6 +221,14 @@ pub enum Binding {
     Params,
     /// Each light's colours and intensity for the shade stage (texels).
     LightColours,
+    /// Every texture's mip chain, packed RGBA8 (texels).
+    TextureTexels,
+    /// The texture uses: texture, sampler, coordinates, transform (texels).
+    TextureUses,
+    /// Each object's normal map, emission and alpha (texels).
+    SurfaceMaps,
+    /// Each triangle's texture coordinates, colours and tangents (texels).
+    Attributes,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -223,7 +247,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 20] = {
+pub const BINDINGS: [BindingInfo; 24] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -246,6 +270,14 @@ pub const BINDINGS: [BindingInfo; 20] = {
         b(Binding::Radiance, "radiance", StorageReadWrite),
         b(Binding::Params, "params", TexelImage),
         b(Binding::LightColours, "light_colours", TexelImage),
+        b(
+            Binding::TextureTexels,
+            "penumbra_texture_texels",
+            TexelImage,
+        ),
+        b(Binding::TextureUses, "penumbra_texture_uses", TexelImage),
+        b(Binding::SurfaceMaps, "penumbra_surface_maps", TexelImage),
+        b(Binding::Attributes, "penumbra_attributes", TexelImage),
     ]
 };
 

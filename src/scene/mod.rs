@@ -94,6 +94,16 @@ pub struct Features {
     pub blinn_phong: bool,
     /// A checker shader is reachable.
     pub checker: bool,
+    /// Something samples a texture: primary hits compute their level of
+    /// detail.
+    pub textures: bool,
+    /// Triangles have vertex attributes (texture coordinates, colours,
+    /// tangents), or something samples a texture.
+    pub attributes: bool,
+    /// Some object has a normal map.
+    pub normal_maps: bool,
+    /// Some object is masked or blended: traversal tests alpha.
+    pub alpha_tests: bool,
 }
 
 impl Scene {
@@ -128,6 +138,18 @@ impl Scene {
                 LightKind::Rect { .. } | LightKind::Sphere { .. } => f.area_lights = true,
             }
         }
+        let uses = self.texture_uses();
+        f.textures = !uses.is_empty();
+        f.attributes = f.textures
+            || self.objects.iter().any(|o| match &o.shape {
+                Shape::Mesh(m) => !m.uvs.is_empty() || m.colours.is_some() || m.tangents.is_some(),
+                _ => false,
+            });
+        f.normal_maps = self.objects.iter().any(|o| o.maps.normal.is_some());
+        f.alpha_tests = self
+            .objects
+            .iter()
+            .any(|o| o.maps.alpha_mode != AlphaMode::Opaque);
         let mut seen = vec![false; self.shaders.len()];
         let mut todo: Vec<ShaderId> = self.objects.iter().map(|o| o.shader).collect();
         while let Some(id) = todo.pop() {

@@ -28,6 +28,7 @@ mod preview;
 mod reference;
 mod shading;
 mod shadows;
+mod textures;
 mod tiles;
 mod user_shaders;
 mod vulkan;

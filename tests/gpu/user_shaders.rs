@@ -283,8 +283,8 @@ fn the_light_colours_normals_and_uv_reach_the_shader() {
         (DVec3::from_array(specular), EXACT),
         (DVec3::Y, EXACT),
         (DVec3::Y, EXACT),
-        // A plane has no texture coordinates: (0, 0).
-        (DVec3::Z, EXACT),
+        // A plane's planar coordinates (checked per pixel below).
+        (DVec3::Z, F32_TOL),
         (to_light, SUM_TOL),
         (DVec3::splat(intensity), EXACT),
     ];
@@ -297,6 +297,15 @@ fn the_light_colours_normals_and_uv_reach_the_shader() {
             "lights": lights
         });
         let img = render(&scene, &[("inputs.wgsl", INPUTS)]);
+        if mode == 4 {
+            // The normal (0, −1, 0) has the axes e_u = (−1, 0, 0) and
+            // e_v = (0, 0, 1) (penumbra::scene::texture): uv = (−x, z).
+            check(&img, &GROUND_CAM, tol, |x, y| {
+                let p = GROUND_CAM.on_ground(x, y);
+                Some(DVec3::new(-p.x, p.z, 1.0))
+            });
+            continue;
+        }
         check(&img, &GROUND_CAM, tol, |_, _| Some(want));
     }
 }
@@ -612,7 +621,12 @@ fn copies_of_the_builtin_files_render_the_builtin_images() {
         for (name, kind, c) in &materials {
             let mut s = json!({"type": kind});
             if user {
-                s = json!({"type": "wgsl", "file": format!("{kind}.wgsl"), "params": c});
+                // The built-ins' texture fields, untextured (no texture use).
+                let mut params = c.as_object().unwrap().clone();
+                for field in ["ambient_texture", "diffuse_texture", "specular_texture"] {
+                    params.insert(field.into(), json!(u32::MAX));
+                }
+                s = json!({"type": "wgsl", "file": format!("{kind}.wgsl"), "params": params});
             } else {
                 s.as_object_mut()
                     .unwrap()

@@ -23,6 +23,7 @@ mod lights;
 mod primitives;
 mod queries;
 mod shading;
+pub mod textures;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -31,9 +32,10 @@ pub use aov::Aov;
 pub use bvh::{node_bounds, node_bounds_f32, BvhNode, PRIM_SPHERE};
 pub use camera::Camera;
 pub use lights::{Light, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_RECT, LIGHT_SPHERE, LIGHT_SPOT};
-pub use primitives::{Plane, Sphere, Triangle, VertexNormals, NO_NORMALS};
+pub use primitives::{plane_axes, Plane, Sphere, Triangle, VertexNormals, NO_NORMALS};
 pub use queries::{QueryHit, QueryRay};
 pub use shading::{ShaderNode, SHADER_CHECKER, SHADER_LEAF};
+pub use textures::GpuTextures;
 
 use crate::scene::Scene;
 
@@ -82,6 +84,28 @@ pub const FLAG_FRESH: u32 = 2;
 /// of light samples, which writes the image (earlier chunks sum in the
 /// colour sums).
 pub const FLAG_LAST_CHUNK: u32 = 4;
+/// `PushConstants::flags` bit: the shade stage interpolates triangles'
+/// vertex attributes (the scene has them).
+pub const FLAG_ATTRIBUTES: u32 = 8;
+/// `PushConstants::flags` bit: the shade stage adds the objects' emission.
+pub const FLAG_EMISSION: u32 = 16;
+
+/// The flags of every dispatch of `scene`'s frames: [`FLAG_ATTRIBUTES`]
+/// and [`FLAG_EMISSION`] where it needs them.
+pub fn shade_flags(scene: &Scene) -> u32 {
+    let mut flags = 0;
+    if scene.features().attributes {
+        flags |= FLAG_ATTRIBUTES;
+    }
+    if scene
+        .objects
+        .iter()
+        .any(|o| o.maps.emission != Vec3::ZERO || o.maps.emission_texture.is_some())
+    {
+        flags |= FLAG_EMISSION;
+    }
+    flags
+}
 
 /// A scene laid out for the GPU.
 #[derive(Clone, Debug, Default)]
@@ -97,6 +121,8 @@ pub struct GpuScene {
     pub bvh_prims: Vec<u32>,
     /// Depth of the BVH (0 when built without one).
     pub bvh_depth: usize,
+    /// Textures, their uses, surface maps and vertex attributes.
+    pub textures: GpuTextures,
 }
 
 pub(super) fn f3(v: DVec3) -> [f32; 3] {
@@ -121,6 +147,7 @@ impl GpuScene {
             primitives::push_object(&mut g, o, object as u32, eye);
         }
         g.lights = scene.lights.iter().map(|l| lights::light(l, eye)).collect();
+        g.textures = GpuTextures::new(scene);
         // Leaves get their program and parameters from the shade stage's
         // materials (super::shade), which read the shader files.
         g.shaders = scene
@@ -213,7 +240,11 @@ mod tests {
                     _pad0
                 ]
             ),
-            layout!("Plane", Plane, [point, shader, normal, object]),
+            layout!(
+                "Plane",
+                Plane,
+                [point, shader, normal, object, uv_origin, _pad]
+            ),
             layout!("Sphere", Sphere, [center, radius, shader, object, _pad]),
             layout!("Triangle", Triangle, [v0, shader, v1, object, v2, normals]),
             layout!("VertexNormals", VertexNormals, [n0, n1, n2]),
@@ -347,6 +378,9 @@ mod tests {
             "FLAG_WARM_UP",
             "FLAG_FRESH",
             "FLAG_LAST_CHUNK",
+            "FLAG_ATTRIBUTES",
+            "FLAG_EMISSION",
+            "KIND_TRIANGLE",
             "KIND_NONE",
             "RECORD_TEXELS",
             "QUEUE_TEXELS",
@@ -378,6 +412,34 @@ mod tests {
             ("FLAG_WARM_UP", FLAG_WARM_UP),
             ("FLAG_FRESH", FLAG_FRESH),
             ("FLAG_LAST_CHUNK", FLAG_LAST_CHUNK),
+            ("FLAG_ATTRIBUTES", FLAG_ATTRIBUTES),
+            ("FLAG_EMISSION", FLAG_EMISSION),
+            ("penumbra_NO_TEXTURE", textures::NO_TEXTURE),
+            ("penumbra_USE_TEXELS", textures::USE_TEXELS as u32),
+            (
+                "penumbra_SURFACE_MAP_TEXELS",
+                textures::SURFACE_MAP_TEXELS as u32,
+            ),
+            (
+                "penumbra_ATTRIBUTE_TEXELS",
+                textures::ATTRIBUTE_TEXELS as u32,
+            ),
+            ("penumbra_TEXTURE_SRGB", textures::TEXTURE_SRGB),
+            ("penumbra_TEXTURE_MAG_LINEAR", textures::TEXTURE_MAG_LINEAR),
+            ("penumbra_TEXTURE_MIN_LINEAR", textures::TEXTURE_MIN_LINEAR),
+            ("penumbra_TEXTURE_MIP_SHIFT", textures::TEXTURE_MIP_SHIFT),
+            (
+                "penumbra_TEXTURE_WRAP_U_SHIFT",
+                textures::TEXTURE_WRAP_U_SHIFT,
+            ),
+            (
+                "penumbra_TEXTURE_WRAP_V_SHIFT",
+                textures::TEXTURE_WRAP_V_SHIFT,
+            ),
+            ("penumbra_TEXTURE_SET_1", textures::TEXTURE_SET_1),
+            ("penumbra_ALPHA_OPAQUE", textures::ALPHA_OPAQUE),
+            ("penumbra_ALPHA_MASK", textures::ALPHA_MASK),
+            ("penumbra_ALPHA_BLEND", textures::ALPHA_BLEND),
             ("SHADER_LEAF", SHADER_LEAF),
             ("SHADER_CHECKER", SHADER_CHECKER),
             ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),

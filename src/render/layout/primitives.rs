@@ -20,6 +20,8 @@ pub struct Plane {
     pub shader: u32,
     pub normal: [f32; 3],
     pub object: u32,
+    pub uv_origin: [f32; 2],
+    pub _pad: [u32; 2],
 }
 
 /// Mirrors `Sphere` in `shaders/primitives/sphere.wgsl`.
@@ -85,12 +87,18 @@ pub(super) fn push_object(g: &mut GpuScene, o: &Object, object: u32, eye: DVec3)
         });
     };
     match &o.shape {
-        Shape::Plane(p) => g.planes.push(Plane {
-            point: f3(closest_point_to(p.point, p.normal, eye) - eye),
-            shader,
-            normal: f3(p.normal),
-            object,
-        }),
+        Shape::Plane(p) => {
+            let q = closest_point_to(p.point, p.normal, eye);
+            let (e_u, e_v) = plane_axes(p.normal);
+            g.planes.push(Plane {
+                point: f3(q - eye),
+                shader,
+                normal: f3(p.normal),
+                object,
+                uv_origin: [q.dot(e_u) as f32, q.dot(e_v) as f32],
+                _pad: [0; 2],
+            })
+        }
         Shape::Sphere(s) => g.spheres.push(Sphere {
             center: f3(s.center - eye),
             radius: s.radius as f32,
@@ -106,6 +114,18 @@ pub(super) fn push_object(g: &mut GpuScene, o: &Object, object: u32, eye: DVec3)
             }
         }
     }
+}
+
+/// A plane's planar texture axes `(e_u, e_v)` from its unit normal, as
+/// `crate::scene::texture` defines them (and `shaders/surface.wgsl`).
+pub fn plane_axes(n: DVec3) -> (DVec3, DVec3) {
+    let a = if n.y.abs() > 0.999 {
+        DVec3::new(0.0, 0.0, -1.0)
+    } else {
+        DVec3::Y
+    };
+    let e_u = a.cross(n).normalize();
+    (e_u, e_u.cross(n))
 }
 
 /// The point of a plane nearest to `eye`: a far-away `point` on the plane

@@ -21,8 +21,13 @@ use std::path::{Path, PathBuf};
 /// The engine's types a shader file is written against.
 pub const INTERFACE: &str = include_str!("../../../shaders/shading/interface.wgsl");
 
-/// The types the engine declares; a shader file must not declare them.
-pub const ENGINE_TYPES: [&str; 2] = ["Surface", "LightSample"];
+/// The texture sampling the interface's `texture_sample` and `texture_at`
+/// call, parsed before it.
+const TEXTURES: &str = include_str!("../../../shaders/textures.wgsl");
+
+/// The types and functions the engine declares; a shader file must not
+/// declare them.
+pub const ENGINE_TYPES: [&str; 4] = ["Surface", "LightSample", "texture_sample", "texture_at"];
 
 /// Names that start with this are the engine's; a shader file must not use them.
 pub const RESERVED_PREFIX: &str = "penumbra_";
@@ -174,6 +179,8 @@ pub struct Reflection {
     pub fields: Vec<ParamField>,
     /// The file defines `fn ambient`.
     pub has_ambient: bool,
+    /// The file defines `fn prepare`.
+    pub has_prepare: bool,
 }
 
 /// A place in a shader file, for an error message.
@@ -491,7 +498,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
             return Err(err(
                 at(id.start, id.start + id.text.len()),
                 format!(
-                    "`{}` is the engine's type (shaders/shading/interface.wgsl); a shader file uses it and must not declare it",
+                    "`{}` is the engine's (shaders/shading/interface.wgsl); a shader file uses it and must not declare it",
                     id.text
                 ),
             ));
@@ -501,7 +508,9 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         }
     }
 
-    let mut text = String::with_capacity(INTERFACE.len() + source.len() + 64);
+    let mut text = String::with_capacity(TEXTURES.len() + INTERFACE.len() + source.len() + 64);
+    text.push_str(TEXTURES);
+    text.push('\n');
     text.push_str(INTERFACE);
     if !text.ends_with('\n') {
         text.push('\n');
@@ -573,10 +582,12 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     }
     let mut shade = None;
     let mut ambient = None;
+    let mut prepare = None;
     for (h, f) in module.functions.iter() {
         match f.name.as_deref() {
             Some("shade") => shade = Some(h),
             Some("ambient") => ambient = Some(h),
+            Some("prepare") => prepare = Some(h),
             _ => {}
         }
     }
@@ -636,11 +647,43 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     if let Some(h) = ambient {
         check(h, "ambient", "vec3<f32>")?;
     }
+    if let Some(h) = prepare {
+        let f = &module.functions[h];
+        let wanted = "fn prepare(Surface, Params) -> Params";
+        let args: Vec<String> = f
+            .arguments
+            .iter()
+            .map(|a| type_name(&module, a.ty))
+            .collect();
+        let result = f.result.as_ref().map(|r| type_name(&module, r.ty));
+        let (args_at, result_at) = user_range(module.functions.get_span(h))
+            .map(|r| signature_parts(source, r))
+            .unwrap_or_default();
+        if args != ["Surface", "Params"] {
+            return Err(err(
+                args_at.map(|r| locate(source, r.start, r.end)),
+                format!(
+                    "`prepare` takes ({}), it must be `{wanted}`",
+                    args.join(", ")
+                ),
+            ));
+        }
+        if result.as_deref() != Some("Params") {
+            return Err(err(
+                result_at.map(|r| locate(source, r.start, r.end)),
+                format!(
+                    "`prepare` returns {}, it must be `{wanted}`",
+                    result.unwrap_or_else(|| "nothing".into())
+                ),
+            ));
+        }
+    }
 
     Ok(Reflection {
         has_params,
         fields,
         has_ambient: ambient.is_some(),
+        has_prepare: prepare.is_some(),
     })
 }
 
@@ -834,7 +877,7 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
     fn reserved_names() {
         let src = "struct Surface { x: f32 }\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return vec3(0.0); }\n";
         let e = reflect_str(src).unwrap_err();
-        assert!(e.message.contains("`Surface` is the engine's type"), "{e}");
+        assert!(e.message.contains("`Surface` is the engine's ("), "{e}");
         assert_eq!(e.at.as_ref().map(|a| (a.line, a.column)), Some((1, 8)));
         let src = "alias LightSample = f32;\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return vec3(0.0); }\n";
         let e = reflect_str(src).unwrap_err();

@@ -1,0 +1,154 @@
+// Texture sampling, exactly as src/scene/texture.rs defines it: RGBA8
+// texels, sRGB decoded before filtering, host-built mip chains, nearest or
+// bilinear within a level, nearest or linear between levels, the three wrap
+// modes and KHR_texture_transform. Filtering is done here, on texel loads,
+// rather than by Vulkan samplers: the f64 reference then implements the same
+// arithmetic, and every mode glTF names is exact on any device.
+//
+// Every name starts with `penumbra_`: the shade stage compiles this file
+// with users' shader files (stages/shade.wgsl).
+//
+// All textures of a scene share one texel image (binding 20): each texture's
+// levels one after the other, four RGBA8 texels packed in each rgba32uint
+// texel (render::layout::textures). A texture use (binding 21) is a texture
+// with its sampler, texture coordinates and transform:
+//   0: level-0 width, height, level count, flags (TEXTURE_* below)
+//   1: first row of the uv transform, the level-of-detail bias
+//      (½·log2(w·h) + log2 of the transform's scale)
+//   2: second row of the uv transform, the first packed texel word of level 0
+
+@group(0) @binding(20) var penumbra_texture_texels: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(21) var penumbra_texture_uses: texture_storage_2d<rgba32uint, read>;
+
+// The index of no texture use: sampling it gives (1, 1, 1, 1).
+const penumbra_NO_TEXTURE: u32 = 0xffffffffu;
+// Texels per texture use (render::layout::USE_TEXELS).
+const penumbra_USE_TEXELS: u32 = 3u;
+// Flags of a texture use (render::layout::textures).
+const penumbra_TEXTURE_SRGB: u32 = 1u;
+const penumbra_TEXTURE_MAG_LINEAR: u32 = 2u;
+const penumbra_TEXTURE_MIN_LINEAR: u32 = 4u;
+// Bits 3-4: mip mode (0 none, 1 nearest, 2 linear); bits 5-6 and 7-8: wrap
+// along u and v (0 repeat, 1 mirrored repeat, 2 clamp to edge); bit 9: the
+// use reads texture coordinate set 1.
+const penumbra_TEXTURE_MIP_SHIFT: u32 = 3u;
+const penumbra_TEXTURE_WRAP_U_SHIFT: u32 = 5u;
+const penumbra_TEXTURE_WRAP_V_SHIFT: u32 = 7u;
+const penumbra_TEXTURE_SET_1: u32 = 512u;
+
+struct penumbra_TextureUse {
+    size: vec2<u32>,
+    levels: u32,
+    flags: u32,
+    row0: vec3<f32>,
+    lod_bias: f32,
+    row1: vec3<f32>,
+    base: u32,
+}
+
+fn penumbra_texture_texel(i: u32) -> vec2<u32> {
+    return vec2<u32>(i & 4095u, i >> 12u);
+}
+
+fn penumbra_texture_use(t: u32) -> penumbra_TextureUse {
+    let at = t * penumbra_USE_TEXELS;
+    let a = textureLoad(penumbra_texture_uses, penumbra_texture_texel(at));
+    let b = textureLoad(penumbra_texture_uses, penumbra_texture_texel(at + 1u));
+    let c = textureLoad(penumbra_texture_uses, penumbra_texture_texel(at + 2u));
+    return penumbra_TextureUse(a.xy, a.z, a.w, bitcast<vec3<f32>>(b.xyz), bitcast<f32>(b.w), bitcast<vec3<f32>>(c.xyz), c.w);
+}
+
+// Which texture coordinate set texture use `t` reads (0 or 1).
+fn penumbra_texture_set(t: u32) -> u32 {
+    if t == penumbra_NO_TEXTURE {
+        return 0u;
+    }
+    let flags = textureLoad(penumbra_texture_uses, penumbra_texture_texel(t * penumbra_USE_TEXELS)).w;
+    return select(0u, 1u, (flags & penumbra_TEXTURE_SET_1) != 0u);
+}
+
+// sRGB's decoding curve (IEC 61966-2-1).
+fn penumbra_srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    return select(c / 12.92, pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c > vec3<f32>(0.04045));
+}
+
+// Texel index `i` wrapped into 0..n by `mode` (scene::Wrap::apply).
+fn penumbra_wrap(i: i32, n: i32, mode: u32) -> i32 {
+    if mode == 0u {
+        return ((i % n) + n) % n;
+    }
+    if mode == 1u {
+        let m = ((i % (2 * n)) + 2 * n) % (2 * n);
+        return select(2 * n - 1 - m, m, m < n);
+    }
+    return clamp(i, 0, n - 1);
+}
+
+// Texel (x, y) of the level that starts at packed word `base` and is `size`
+// texels, wrapped, as linear RGBA.
+fn penumbra_fetch(u: penumbra_TextureUse, base: u32, size: vec2<u32>, x: i32, y: i32) -> vec4<f32> {
+    let xi = penumbra_wrap(x, i32(size.x), (u.flags >> penumbra_TEXTURE_WRAP_U_SHIFT) & 3u);
+    let yi = penumbra_wrap(y, i32(size.y), (u.flags >> penumbra_TEXTURE_WRAP_V_SHIFT) & 3u);
+    let word = base + u32(yi) * size.x + u32(xi);
+    let packed = textureLoad(penumbra_texture_texels, penumbra_texture_texel(word >> 2u));
+    var c = unpack4x8unorm(packed[word & 3u]);
+    if (u.flags & penumbra_TEXTURE_SRGB) != 0u {
+        c = vec4<f32>(penumbra_srgb_to_linear(c.rgb), c.a);
+    }
+    return c;
+}
+
+// Level `level` of use `u` at transformed coordinates `st`: the texel that
+// holds the point, or bilinear between the four texel centres around it.
+fn penumbra_sample_level(u: penumbra_TextureUse, level: u32, st: vec2<f32>, linear: bool) -> vec4<f32> {
+    var base = u.base;
+    var size = u.size;
+    for (var k = 0u; k < level; k++) {
+        base += size.x * size.y;
+        size = max(size >> vec2<u32>(1u), vec2<u32>(1u));
+    }
+    let p = st * vec2<f32>(size);
+    if !linear {
+        let f = floor(p);
+        return penumbra_fetch(u, base, size, i32(f.x), i32(f.y));
+    }
+    let q = p - 0.5;
+    let f = floor(q);
+    let w = q - f;
+    let x = i32(f.x);
+    let y = i32(f.y);
+    let top = mix(penumbra_fetch(u, base, size, x, y), penumbra_fetch(u, base, size, x + 1, y), w.x);
+    let bottom = mix(penumbra_fetch(u, base, size, x, y + 1), penumbra_fetch(u, base, size, x + 1, y + 1), w.x);
+    return mix(top, bottom, w.y);
+}
+
+// Texture use `t` at texture coordinates `uv`, whose geometric level of
+// detail is `lambda` (ray cones, without the texture's own terms; -inf or
+// NaN magnifies): linear RGBA, or (1, 1, 1, 1) for no texture.
+fn penumbra_texture_lod(t: u32, uv: vec2<f32>, lambda: f32) -> vec4<f32> {
+    if t == penumbra_NO_TEXTURE {
+        return vec4<f32>(1.0);
+    }
+    let u = penumbra_texture_use(t);
+    let st = vec2<f32>(dot(u.row0.xy, uv) + u.row0.z, dot(u.row1.xy, uv) + u.row1.z);
+    let l = lambda + u.lod_bias;
+    if !(l > 0.0) {
+        return penumbra_sample_level(u, 0u, st, (u.flags & penumbra_TEXTURE_MAG_LINEAR) != 0u);
+    }
+    let min_linear = (u.flags & penumbra_TEXTURE_MIN_LINEAR) != 0u;
+    let mip = (u.flags >> penumbra_TEXTURE_MIP_SHIFT) & 3u;
+    let last = f32(u.levels - 1u);
+    if mip == 0u {
+        return penumbra_sample_level(u, 0u, st, min_linear);
+    }
+    if mip == 1u {
+        return penumbra_sample_level(u, u32(min(round(l), last)), st, min_linear);
+    }
+    let lo = min(floor(l), last);
+    if lo >= last {
+        return penumbra_sample_level(u, u32(last), st, min_linear);
+    }
+    let a = penumbra_sample_level(u, u32(lo), st, min_linear);
+    let b = penumbra_sample_level(u, u32(lo) + 1u, st, min_linear);
+    return mix(a, b, l - lo);
+}

@@ -1,0 +1,211 @@
+//! Textures as the kernel sees them (`shaders/textures.wgsl`,
+//! `shaders/surface_maps.wgsl`, `shaders/attributes.wgsl`): every texture's
+//! mip chain packed into one texel image, the table of texture uses, each
+//! object's surface maps, and each triangle's vertex attributes.
+
+use glam::{DVec3, Vec4};
+
+use crate::scene::texture::{AlphaMode, Filter, Sampler, TextureRef, Wrap};
+use crate::scene::{Scene, Shape};
+
+/// Texels per texture use (`penumbra_USE_TEXELS`).
+pub const USE_TEXELS: usize = 3;
+/// Texels per object's surface maps (`penumbra_SURFACE_MAP_TEXELS`).
+pub const SURFACE_MAP_TEXELS: usize = 3;
+/// Texels per triangle's vertex attributes (`penumbra_ATTRIBUTE_TEXELS`).
+pub const ATTRIBUTE_TEXELS: usize = 9;
+/// Texture use index meaning "no texture" (`penumbra_NO_TEXTURE`).
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// Flag bits of a texture use, as in `shaders/textures.wgsl`.
+pub const TEXTURE_SRGB: u32 = 1;
+/// Magnification is bilinear.
+pub const TEXTURE_MAG_LINEAR: u32 = 2;
+/// Minification is bilinear within a level.
+pub const TEXTURE_MIN_LINEAR: u32 = 4;
+/// First bit of the mip mode (0 none, 1 nearest, 2 linear).
+pub const TEXTURE_MIP_SHIFT: u32 = 3;
+/// First bit of the wrap mode along u (0 repeat, 1 mirrored, 2 clamp).
+pub const TEXTURE_WRAP_U_SHIFT: u32 = 5;
+/// First bit of the wrap mode along v.
+pub const TEXTURE_WRAP_V_SHIFT: u32 = 7;
+/// The use reads texture coordinate set 1.
+pub const TEXTURE_SET_1: u32 = 512;
+
+/// Alpha modes, as in `shaders/surface_maps.wgsl`.
+pub const ALPHA_OPAQUE: u32 = 0;
+/// Cut-out below a cutoff.
+pub const ALPHA_MASK: u32 = 1;
+/// Stochastic transparency.
+pub const ALPHA_BLEND: u32 = 2;
+
+/// A scene's textures laid out for the GPU.
+#[derive(Clone, Debug, Default)]
+pub struct GpuTextures {
+    /// Every texture's mip chain, RGBA8 texels packed four to a texel.
+    pub texels: Vec<[u32; 4]>,
+    /// The texture uses ([`Scene::texture_uses`] order), [`USE_TEXELS`] each.
+    pub uses: Vec<[u32; 4]>,
+    /// Per object, [`SURFACE_MAP_TEXELS`] each.
+    pub surface_maps: Vec<[u32; 4]>,
+    /// Per triangle (GPU order), [`ATTRIBUTE_TEXELS`] each; empty when no
+    /// mesh has attributes and the scene samples no texture.
+    pub attributes: Vec<[u32; 4]>,
+    /// Bytes of texels with their mip chains (the render summary's texture
+    /// memory).
+    pub texture_bytes: u64,
+}
+
+fn wrap_bits(w: Wrap) -> u32 {
+    match w {
+        Wrap::Repeat => 0,
+        Wrap::MirroredRepeat => 1,
+        Wrap::ClampToEdge => 2,
+    }
+}
+
+fn sampler_flags(s: &Sampler) -> u32 {
+    let mut f = 0;
+    if s.mag == Filter::Linear {
+        f |= TEXTURE_MAG_LINEAR;
+    }
+    if s.min == Filter::Linear {
+        f |= TEXTURE_MIN_LINEAR;
+    }
+    let mip = match s.mip {
+        None => 0,
+        Some(Filter::Nearest) => 1,
+        Some(Filter::Linear) => 2,
+    };
+    f | mip << TEXTURE_MIP_SHIFT
+        | wrap_bits(s.wrap_u) << TEXTURE_WRAP_U_SHIFT
+        | wrap_bits(s.wrap_v) << TEXTURE_WRAP_V_SHIFT
+}
+
+/// The three texels of texture use `r` of a texture whose level 0 starts at
+/// packed word `base` and which has `levels` levels.
+fn use_texels(scene: &Scene, r: &TextureRef, base: u32, levels: u32) -> [[u32; 4]; 3] {
+    let t = &scene.textures[r.texture];
+    let mut flags = sampler_flags(&r.sampler);
+    if t.srgb {
+        flags |= TEXTURE_SRGB;
+    }
+    if r.tex_coord == 1 {
+        flags |= TEXTURE_SET_1;
+    }
+    let m = r.transform.matrix();
+    let bias = 0.5 * (f64::from(t.width) * f64::from(t.height)).log2() + r.transform.lod_bias();
+    let f = |x: f64| (x as f32).to_bits();
+    [
+        [t.width, t.height, levels, flags],
+        [f(m.x_axis.x), f(m.y_axis.x), f(m.z_axis.x), f(bias)],
+        [f(m.x_axis.y), f(m.y_axis.y), f(m.z_axis.y), base],
+    ]
+}
+
+fn use_index(uses: &[TextureRef], t: &Option<TextureRef>) -> u32 {
+    t.as_ref()
+        .map_or(NO_TEXTURE, |t| Scene::texture_use_index(uses, t))
+}
+
+impl GpuTextures {
+    /// Lays out `scene`'s textures, uses, surface maps and vertex
+    /// attributes (tangents relative to nothing: they are directions).
+    pub fn new(scene: &Scene) -> GpuTextures {
+        let mut g = GpuTextures::default();
+        let uses = scene.texture_uses();
+        // Each texture's chain, at a word offset of its own.
+        let mut words: Vec<u32> = Vec::new();
+        let mut chains = Vec::with_capacity(scene.textures.len());
+        for t in &scene.textures {
+            let base = words.len() as u32;
+            let chain = t.mip_chain();
+            for level in &chain {
+                words.extend(level.texels.iter().map(|p| u32::from_le_bytes(*p)));
+            }
+            chains.push((base, chain.len() as u32));
+        }
+        g.texture_bytes = words.len() as u64 * 4;
+        words.resize(words.len().next_multiple_of(4), 0);
+        g.texels = words
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect();
+        for r in &uses {
+            let (base, levels) = chains[r.texture];
+            g.uses.extend(use_texels(scene, r, base, levels));
+        }
+        for o in &scene.objects {
+            let m = &o.maps;
+            let f = |x: f32| x.to_bits();
+            let (mode, cutoff) = match m.alpha_mode {
+                AlphaMode::Opaque => (ALPHA_OPAQUE, 0.0),
+                AlphaMode::Mask { cutoff } => (ALPHA_MASK, cutoff),
+                AlphaMode::Blend => (ALPHA_BLEND, 0.0),
+            };
+            let (normal, scale) = match &m.normal {
+                Some((t, s)) => (Scene::texture_use_index(&uses, t), *s),
+                None => (NO_TEXTURE, 1.0),
+            };
+            g.surface_maps.extend([
+                [
+                    f(m.emission.x),
+                    f(m.emission.y),
+                    f(m.emission.z),
+                    use_index(&uses, &m.emission_texture),
+                ],
+                [normal, f(scale), mode, f(cutoff)],
+                [f(m.opacity), use_index(&uses, &m.opacity_texture), 0, 0],
+            ]);
+        }
+        if scene.features().attributes {
+            g.attributes = attributes(scene);
+        }
+        g
+    }
+}
+
+/// Every triangle's attribute texels, in the GPU's triangle order
+/// (objects in order, each mesh's triangles in order).
+fn attributes(scene: &Scene) -> Vec<[u32; 4]> {
+    let f = |x: f64| (x as f32).to_bits();
+    let c = |v: Vec4| v.to_array().map(f32::to_bits);
+    let mut out = Vec::new();
+    let mut push =
+        |uv0: [glam::DVec2; 3], uv1: [glam::DVec2; 3], col: [Vec4; 3], tan: [[u32; 4]; 3]| {
+            out.push([f(uv0[0].x), f(uv0[0].y), f(uv0[1].x), f(uv0[1].y)]);
+            out.push([f(uv0[2].x), f(uv0[2].y), f(uv1[0].x), f(uv1[0].y)]);
+            out.push([f(uv1[1].x), f(uv1[1].y), f(uv1[2].x), f(uv1[2].y)]);
+            out.extend(col.map(c));
+            out.extend(tan);
+        };
+    let zero = [glam::DVec2::ZERO; 3];
+    for o in &scene.objects {
+        match &o.shape {
+            Shape::Triangle(_) => push(zero, zero, [Vec4::ONE; 3], [[0; 4]; 3]),
+            Shape::Mesh(m) => {
+                for idx in &m.indices {
+                    let at = |set: usize| {
+                        m.uvs
+                            .get(set)
+                            .map_or(zero, |uv| idx.map(|k| uv[k as usize]))
+                    };
+                    let col = m
+                        .colours
+                        .as_ref()
+                        .map_or([Vec4::ONE; 3], |cs| idx.map(|k| cs[k as usize]));
+                    let tan = m.tangents.as_ref().map_or([[0; 4]; 3], |ts| {
+                        idx.map(|k| {
+                            let t = ts[k as usize];
+                            let d = DVec3::new(t.x, t.y, t.z);
+                            [f(d.x), f(d.y), f(d.z), f(t.w)]
+                        })
+                    });
+                    push(at(0), at(1), col, tan);
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
