@@ -9,6 +9,7 @@ pub mod quantised_bvh;
 mod reload;
 pub mod shade;
 pub mod stages;
+mod texture_edit;
 pub mod tiles;
 mod trace;
 
@@ -150,6 +151,8 @@ pub struct UploadedScene {
     shade_flags: u32,
     /// Bytes of textures with their mip chains on the device.
     texture_bytes: u64,
+    /// Where each texture lies in the texture texels (texture edits).
+    texture_chains: Vec<layout::textures::TextureChain>,
     /// Shade programs and parameters.
     materials: Materials,
     /// Light samples per pixel and pass, over all lights.
@@ -775,6 +778,7 @@ impl Renderer {
             texture_uses: scene.texture_uses(),
             shade_flags: layout::shade_flags(scene),
             texture_bytes: gpu.textures.texture_bytes,
+            texture_chains: gpu.textures.chains.clone(),
             materials,
             light_samples,
             light_count: gpu.lights.len() as u32,

@@ -258,6 +258,125 @@ impl Context {
         Ok(result)
     }
 
+    /// Overwrites texels `first..first + data.len() / TEXEL_BYTES` of `image` with `data`
+    /// (a texture edit re-uploads that texture's texels only). The range may start and end
+    /// mid-row: it is copied as up to three rectangles (the first partial row, the whole rows,
+    /// the last partial row).
+    pub fn write_texel_image(
+        &self,
+        image: &TexelImage,
+        first: u64,
+        data: &[u8],
+    ) -> Result<(), VulkanError> {
+        self.check_owned_image(image)?;
+        if !data.len().is_multiple_of(TEXEL_BYTES) {
+            return Err(VulkanError::InvalidArgument(format!(
+                "texel image '{}': {} bytes is not a whole number of texels",
+                image.label,
+                data.len()
+            )));
+        }
+        let count = (data.len() / TEXEL_BYTES) as u64;
+        if count == 0 {
+            return Ok(());
+        }
+        if first + count > image.texels {
+            return Err(VulkanError::InvalidArgument(format!(
+                "texel image '{}': texels {first}..{} lie beyond its {}",
+                image.label,
+                first + count,
+                image.texels
+            )));
+        }
+        let staging = self.upload_buffer(&image.label, data.len() as u64, data)?;
+        let row = TEXEL_ROW as u64;
+        let mut regions = Vec::new();
+        let (mut at, end) = (first, first + count);
+        while at < end {
+            let x = at % row;
+            let width = if x == 0 && end - at >= row {
+                // Whole rows from here.
+                ((end - at) / row) * row
+            } else {
+                (row - x).min(end - at)
+            };
+            let (w, h) = if width >= row {
+                (row, width / row)
+            } else {
+                (width, 1)
+            };
+            regions.push(
+                vk::BufferImageCopy::default()
+                    .buffer_offset((at - first) * TEXEL_BYTES as u64)
+                    .buffer_row_length(TEXEL_ROW)
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .layer_count(1),
+                    )
+                    .image_offset(vk::Offset3D {
+                        x: x as i32,
+                        y: (at / row) as i32,
+                        z: 0,
+                    })
+                    .image_extent(vk::Extent3D {
+                        width: w as u32,
+                        height: h as u32,
+                        depth: 1,
+                    }),
+            );
+            at += w * h;
+        }
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        let to_transfer = vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::GENERAL)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_access_mask(vk::AccessFlags::SHADER_READ)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.image)
+            .subresource_range(range);
+        let to_shader = to_transfer
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::SHADER_READ);
+        use vk::PipelineStageFlags as S;
+        let flags = vk::DependencyFlags::empty();
+        // SAFETY: the image and the staging buffer are valid; every submit waits for its
+        // fence, so no dispatch reads the image meanwhile.
+        self.submit(|device, cmd| unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                S::COMPUTE_SHADER,
+                S::TRANSFER,
+                flags,
+                &[],
+                &[],
+                &[to_transfer],
+            );
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                staging.handle,
+                image.image,
+                vk::ImageLayout::GENERAL,
+                &regions,
+            );
+            device.cmd_pipeline_barrier(
+                cmd,
+                S::TRANSFER,
+                S::COMPUTE_SHADER,
+                flags,
+                &[],
+                &[],
+                &[to_shader],
+            );
+        })?;
+        Ok(())
+    }
+
     /// Rejects images created by another context (their handles are invalid on this device).
     pub(crate) fn check_owned_image(&self, image: &TexelImage) -> Result<(), VulkanError> {
         if Arc::ptr_eq(&image.shared, &self.shared) {

@@ -265,3 +265,260 @@ fn a_mask_cuts_out() {
     // Alpha falls from 1 to 0.41 over the texels: both kinds are tested.
     assert!(cut > 0 && kept > 0, "cut {cut}, kept {kept}");
 }
+
+/// Checks every pixel of `frame` (an `n`×`n` image of the quad) against
+/// `want(world x, world y)`.
+#[track_caller]
+fn check_quad(
+    frame: &penumbra::render::Frame,
+    n: u32,
+    tol: f64,
+    want: impl Fn(f64, f64) -> [f64; 3],
+) {
+    for y in 0..n {
+        for x in 0..n {
+            let wx = -1.0 + 2.0 * (f64::from(x) + 0.5) / f64::from(n);
+            let wy = 1.0 - 2.0 * (f64::from(y) + 0.5) / f64::from(n);
+            support::assert_rgb(frame.image.pixels[(y * n + x) as usize], want(wx, wy), tol);
+        }
+    }
+}
+
+/// Vertex colours that are an affine function of the position: every
+/// triangulation interpolates them exactly, so the pixel's colour is known
+/// in closed form. They multiply the textured diffuse colour.
+#[test]
+fn vertex_colours_multiply_the_diffuse_colour() {
+    let colour = |x: f64, y: f64| [0.5 + 0.25 * x, 0.5 + 0.25 * y, 0.3 + 0.1 * x + 0.2 * y];
+    let mut mesh = quad(DVec2::ONE);
+    mesh.colours = Some(
+        mesh.positions
+            .iter()
+            .map(|p| {
+                let c = colour(p.x, p.y);
+                glam::Vec4::new(c[0] as f32, c[1] as f32, c[2] as f32, 1.0)
+            })
+            .collect(),
+    );
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let t = texture(true);
+    let frame = support::render(&scene(mesh, 16, use_, vec![t.clone()]));
+    check_quad(&frame, 16, TOL, |x, y| {
+        let uv = DVec2::new((x + 1.0) / 2.0, (1.0 - y) / 2.0);
+        let tex = expected(&t, uv, Filter::Nearest, (Wrap::Repeat, Wrap::Repeat));
+        let c = colour(x, y);
+        [tex[0] * c[0], tex[1] * c[1], tex[2] * c[2]]
+    });
+}
+
+/// Emission × its texture is added to the colour at the point; with no
+/// diffuse colour it is the whole colour.
+#[test]
+fn emission_is_added() {
+    let t = texture(true);
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let mut s = scene(quad(DVec2::ONE), 16, use_, vec![t.clone()]);
+    let Shader::Phong(p) = &mut s.shaders[0] else {
+        unreachable!()
+    };
+    p.diffuse = Vec3::splat(0.5);
+    p.textures.diffuse = None;
+    let emission = [0.25, 0.5, 2.0];
+    s.objects[0].maps = SurfaceMaps {
+        emission: Vec3::new(0.25, 0.5, 2.0),
+        emission_texture: Some(use_),
+        ..SurfaceMaps::default()
+    };
+    let frame = support::render(&s);
+    check_quad(&frame, 16, TOL, |x, y| {
+        let uv = DVec2::new((x + 1.0) / 2.0, (1.0 - y) / 2.0);
+        let tex = expected(&t, uv, Filter::Nearest, (Wrap::Repeat, Wrap::Repeat));
+        std::array::from_fn(|c| 0.5 + emission[c] * tex[c])
+    });
+}
+
+/// A constant normal map that tilts the normal by 30° towards the tangent,
+/// with glTF's `scale`: the Lambert term of a light from (1, 0, 1) is the
+/// tilted normal's dot product with it, computed here from the texel bytes.
+#[test]
+fn a_normal_map_tilts_the_normal_by_a_known_angle() {
+    let theta = 30f64.to_radians();
+    let byte = |c: f64| ((c + 1.0) / 2.0 * 255.0).round() as u8;
+    let texel = [byte(theta.sin()), byte(0.0), byte(theta.cos()), 255];
+    let map = Texture {
+        label: "normal map".into(),
+        file: None,
+        width: 2,
+        height: 2,
+        texels: vec![texel; 4],
+        srgb: false,
+    };
+    for (scale, tangent_w) in [(1.0f32, 1.0), (0.5, -1.0)] {
+        let mut mesh = quad(DVec2::ONE);
+        mesh.normals = Some(vec![DVec3::Z; 4]);
+        mesh.tangents = Some(vec![glam::DVec4::new(1.0, 0.0, 0.0, tangent_w); 4]);
+        let white = Texture {
+            label: "white".into(),
+            file: None,
+            width: 1,
+            height: 1,
+            texels: vec![[255; 4]],
+            srgb: true,
+        };
+        let mut s = scene(mesh, 8, TextureRef::new(0), vec![white, map.clone()]);
+        let l = DVec3::new(1.0, 0.0, 1.0).normalize();
+        s.lights[0].kind = LightKind::Directional { direction: -l };
+        s.objects[0].maps = SurfaceMaps {
+            normal: Some((TextureRef::new(1), scale)),
+            ..SurfaceMaps::default()
+        };
+        let frame = support::render(&s);
+        // The tangent-space normal from the bytes, with x and y scaled; the
+        // tangent is +X, the normal +Z, the bitangent w·(Z × X) = w·Y.
+        let t = DVec3::from_array(std::array::from_fn(|c| {
+            2.0 * f64::from(texel[c]) / 255.0 - 1.0
+        })) * DVec3::new(f64::from(scale), f64::from(scale), 1.0);
+        let t = t.normalize();
+        let n = DVec3::new(t.x, tangent_w * t.y, t.z);
+        let want = n.dot(l);
+        // Tilted towards the light: brighter than the untilted cos 45°.
+        assert!(want > 0.8, "{want}");
+        check_quad(&frame, 8, TOL, |_, _| [want; 3]);
+    }
+}
+
+/// A ground plane with a fine checker texture (8-texel checks, 8 checks a
+/// unit) seen at a grazing angle. Far away a pixel's footprint covers many
+/// checks, so its correct (area-averaged) value is the texture's mean,
+/// linear 0.5. With mip-maps and ray-cone level of detail the far pixels
+/// stay within 0.06 of it; without mip-maps (level 0 only) the same pixels
+/// alias to near black or white, which the test also asserts, so it fails if
+/// level selection does nothing.
+#[test]
+fn mip_maps_keep_a_receding_plane_from_aliasing() {
+    let side = 64u32;
+    let texels = (0..side * side)
+        .map(|i| {
+            let (x, y) = (i % side, i / side);
+            if ((x / 8) + (y / 8)) % 2 == 0 {
+                [255, 255, 255, 255]
+            } else {
+                [0, 0, 0, 255]
+            }
+        })
+        .collect();
+    let checks = Texture {
+        label: "checks".into(),
+        file: None,
+        width: side,
+        height: side,
+        texels,
+        srgb: true,
+    };
+    let (w, h, fov) = (64u32, 48u32, 40.0f64);
+    let eye = DVec3::new(0.0, 1.0, 0.0);
+    let target = DVec3::new(0.0, 0.0, -20.0);
+    let render = |mip: Option<Filter>| {
+        let use_ = TextureRef {
+            sampler: Sampler {
+                mip,
+                ..Sampler::default()
+            },
+            ..TextureRef::new(0)
+        };
+        let mut s = scene(quad(DVec2::ONE), 8, use_, vec![checks.clone()]);
+        s.objects[0].shape = Shape::Plane(penumbra::scene::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Y,
+        });
+        s.lights[0].kind = LightKind::Directional {
+            direction: -DVec3::Y,
+        };
+        s.camera = Camera {
+            position: eye,
+            orientation: Camera::look_at(eye, target, DVec3::Y).unwrap(),
+            projection: Projection::Perspective { vfov_deg: fov },
+            width: w,
+            height: h,
+        };
+        support::render(&s)
+    };
+    // Pixels whose ray meets the ground more than 12 units away.
+    let back = (eye - target).normalize();
+    let right = DVec3::Y.cross(back).normalize();
+    let up = back.cross(right);
+    let hh = (fov.to_radians() / 2.0).tan();
+    let hw = hh * f64::from(w) / f64::from(h);
+    let mut far = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let sx = ((f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0) * hw;
+            let sy = (1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0) * hh;
+            let d = (-back + sx * right + sy * up).normalize();
+            if d.y < 0.0 && -eye.y / d.y > 12.0 {
+                far.push((y * w + x) as usize);
+            }
+        }
+    }
+    assert!(far.len() > 40, "{} far pixels", far.len());
+    let worst = |frame: &penumbra::render::Frame| {
+        far.iter()
+            .map(|&i| (f64::from(frame.image.pixels[i][0]) - 0.5).abs())
+            .fold(0.0, f64::max)
+    };
+    let filtered = worst(&render(Some(Filter::Linear)));
+    let aliased = worst(&render(None));
+    assert!(
+        filtered <= 0.06,
+        "trilinear: far pixels {filtered} from the mean"
+    );
+    assert!(
+        aliased > 0.3,
+        "level 0 only: far pixels only {aliased} from the mean"
+    );
+}
+
+/// Replacing a texture's texels on the device changes the next image as
+/// the new texture says; a texture of another size is refused.
+#[test]
+fn a_replaced_texture_shows_in_the_next_render() {
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let old = texture(true);
+    let s = scene(quad(DVec2::ONE), 16, use_, vec![old.clone()]);
+    s.validate().unwrap();
+    let mut new = old.clone();
+    new.texels.reverse();
+    let mut r = support::renderer();
+    let mut up = r.upload(&s).unwrap();
+    let before = r.render_uploaded(&up, 16, 16).unwrap();
+    r.replace_texture(&mut up, 0, &new).unwrap();
+    let after = r.render_uploaded(&up, 16, 16).unwrap();
+    let bigger = Texture {
+        width: 8,
+        texels: vec![[0; 4]; 32],
+        ..old.clone()
+    };
+    let refused = r
+        .replace_texture(&mut up, 0, &bigger)
+        .unwrap_err()
+        .to_string();
+    drop(r);
+    assert!(refused.contains("8×4"), "{refused}");
+    let wrap = (Wrap::Repeat, Wrap::Repeat);
+    for (frame, t) in [(&before, &old), (&after, &new)] {
+        check_quad(frame, 16, TOL, |x, y| {
+            let uv = DVec2::new((x + 1.0) / 2.0, (1.0 - y) / 2.0);
+            let e = expected(t, uv, Filter::Nearest, wrap);
+            [e[0], e[1], e[2]]
+        });
+    }
+}

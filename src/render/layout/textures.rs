@@ -54,6 +54,36 @@ pub struct GpuTextures {
     /// Bytes of texels with their mip chains (the render summary's texture
     /// memory).
     pub texture_bytes: u64,
+    /// Where each texture's chain lies in [`GpuTextures::texels`].
+    pub chains: Vec<TextureChain>,
+}
+
+/// Where one texture's mip chain lies in the packed texels, and what it
+/// was made from: a texture of the same size and colour space can replace
+/// it in place.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TextureChain {
+    /// The texel its level 0 starts at.
+    pub first_texel: u64,
+    /// Its packed words (texels, levels one after the other).
+    pub words: usize,
+    /// Level-0 width.
+    pub width: u32,
+    /// Level-0 height.
+    pub height: u32,
+    /// Colour texture (sRGB).
+    pub srgb: bool,
+}
+
+/// `t`'s mip chain as packed words (one RGBA8 texel each, level after
+/// level), and its level count.
+pub fn texture_words(t: &crate::scene::Texture) -> (Vec<u32>, u32) {
+    let chain = t.mip_chain();
+    let words = chain
+        .iter()
+        .flat_map(|level| level.texels.iter().map(|p| u32::from_le_bytes(*p)))
+        .collect();
+    (words, chain.len() as u32)
 }
 
 fn wrap_bits(w: Wrap) -> u32 {
@@ -118,14 +148,22 @@ impl GpuTextures {
         let mut words: Vec<u32> = Vec::new();
         let mut chains = Vec::with_capacity(scene.textures.len());
         for t in &scene.textures {
+            // Each chain starts a texel, so one texture's texels can be
+            // rewritten without touching another's ([`texture_words`]).
+            words.resize(words.len().next_multiple_of(4), 0);
             let base = words.len() as u32;
-            let chain = t.mip_chain();
-            for level in &chain {
-                words.extend(level.texels.iter().map(|p| u32::from_le_bytes(*p)));
-            }
-            chains.push((base, chain.len() as u32));
+            let chain = texture_words(t);
+            words.extend(&chain.0);
+            chains.push((base, chain.1));
+            g.chains.push(TextureChain {
+                first_texel: u64::from(base / 4),
+                words: chain.0.len(),
+                width: t.width,
+                height: t.height,
+                srgb: t.srgb,
+            });
         }
-        g.texture_bytes = words.len() as u64 * 4;
+        g.texture_bytes = g.chains.iter().map(|c| c.words as u64 * 4).sum();
         words.resize(words.len().next_multiple_of(4), 0);
         g.texels = words
             .chunks_exact(4)
