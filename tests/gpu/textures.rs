@@ -522,3 +522,150 @@ fn a_replaced_texture_shows_in_the_next_render() {
         });
     }
 }
+
+/// The ground y = 0 seen from straight above (orthographic, window
+/// x ∈ [−2, −1], z ∈ [−0.5, 0.5]) in the shadow that a horizontal quad at
+/// y = 1 (x, z ∈ [−1, 1], uv = ((x + 1)/2, (z + 1)/2)) casts under a light
+/// from (1, 1, 0): ground point (X, Z) sees the light through quad point
+/// (X + 1, Z). The quad itself is out of view.
+fn shadow_scene(maps: SurfaceMaps, n: u32) -> Scene {
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let mut s = scene(
+        Mesh {
+            positions: vec![
+                DVec3::new(-1.0, 1.0, -1.0),
+                DVec3::new(1.0, 1.0, -1.0),
+                DVec3::new(1.0, 1.0, 1.0),
+                DVec3::new(-1.0, 1.0, 1.0),
+            ],
+            normals: None,
+            indices: vec![[0, 2, 1], [0, 3, 2]],
+            uvs: vec![vec![
+                DVec2::ZERO,
+                DVec2::new(1.0, 0.0),
+                DVec2::ONE,
+                DVec2::new(0.0, 1.0),
+            ]],
+            colours: None,
+            tangents: None,
+        },
+        n,
+        use_,
+        vec![texture(true)],
+    );
+    s.objects[0].maps = maps;
+    s.shaders.push(Shader::Phong(Phong {
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+        textures: PhongTextures::default(),
+    }));
+    s.objects.push(Object {
+        shape: Shape::Plane(penumbra::scene::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Y,
+        }),
+        shader: 1,
+        maps: SurfaceMaps::default(),
+    });
+    s.lights[0].kind = LightKind::Directional {
+        direction: -DVec3::new(1.0, 1.0, 0.0).normalize(),
+    };
+    s.camera = Camera {
+        position: DVec3::new(-1.5, 5.0, 0.0),
+        orientation: DMat3::from_cols(DVec3::X, -DVec3::Z, DVec3::Y),
+        projection: Projection::Orthographic { half_height: 0.5 },
+        width: n,
+        height: n,
+    };
+    s
+}
+
+/// The quad point (u, v) that ground pixel (x, y) of `shadow_scene` sees
+/// the light through.
+fn shadow_uv(x: u32, y: u32, n: u32) -> DVec2 {
+    let gx = -1.5 + ((f64::from(x) + 0.5) / f64::from(n) * 2.0 - 1.0) * 0.5;
+    let gz = -(1.0 - (f64::from(y) + 0.5) / f64::from(n) * 2.0) * 0.5;
+    DVec2::new((gx + 1.0 + 1.0) / 2.0, (gz + 1.0) / 2.0)
+}
+
+/// A masked quad casts the shadow of its mask: ground points behind a kept
+/// texel are dark, those behind a cut texel lit (cos 45° for this light).
+#[test]
+fn a_mask_casts_a_shadow_of_its_shape() {
+    let n = 16;
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let maps = SurfaceMaps {
+        alpha_mode: AlphaMode::Mask { cutoff: 0.75 },
+        opacity: 1.0,
+        opacity_texture: Some(use_),
+        ..SurfaceMaps::default()
+    };
+    let t = texture(true);
+    let frame = support::render(&shadow_scene(maps, n));
+    let lit = std::f64::consts::FRAC_1_SQRT_2;
+    let (mut dark, mut bright) = (0, 0);
+    for y in 0..n {
+        for x in 0..n {
+            let a = expected(
+                &t,
+                shadow_uv(x, y, n),
+                Filter::Nearest,
+                (Wrap::Repeat, Wrap::Repeat),
+            )[3];
+            let want = if a >= 0.75 { 0.0 } else { lit };
+            if a >= 0.75 {
+                dark += 1;
+            } else {
+                bright += 1;
+            }
+            support::assert_rgb(frame.image.pixels[(y * n + x) as usize], [want; 3], 1e-5);
+        }
+    }
+    assert!(dark > 0 && bright > 0, "dark {dark}, bright {bright}");
+    // Opaque, the same quad shadows every one of these pixels.
+    let frame = support::render(&shadow_scene(SurfaceMaps::default(), n));
+    assert!(frame.image.pixels.iter().all(|p| p[0] == 0.0));
+}
+
+/// Blending is stochastic transparency: a shadow ray passes a point of
+/// alpha 0.3 with probability 0.7. The same seed gives the same image, and
+/// the mean over 64 samples a pixel converges to 0.7 of the light: each
+/// pixel is a mean of 64 Bernoulli draws (standard deviation 0.057 of the
+/// lit value), the mean over 256 pixels has a standard deviation of 0.0036
+/// of it; 0.02 is over five of those.
+#[test]
+fn blending_is_deterministic_and_converges() {
+    let n = 16;
+    let maps = SurfaceMaps {
+        alpha_mode: AlphaMode::Blend,
+        opacity: 0.3,
+        ..SurfaceMaps::default()
+    };
+    let s = shadow_scene(maps, n);
+    let sampling = |seed| penumbra::render::Sampling {
+        spp: 64,
+        seed,
+        time_budget: None,
+    };
+    let kernel = support::renderer().kernel();
+    let a = support::render_with(&s, kernel, sampling(7));
+    let b = support::render_with(&s, kernel, sampling(7));
+    let c = support::render_with(&s, kernel, sampling(8));
+    assert_eq!(a.image.pixels, b.image.pixels);
+    assert_ne!(a.image.pixels, c.image.pixels);
+    let lit = std::f64::consts::FRAC_1_SQRT_2;
+    let mean = a.image.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / f64::from(n * n);
+    assert!(
+        (mean / lit - 0.7).abs() <= 0.02,
+        "mean {mean}, {} of the light",
+        mean / lit
+    );
+}
