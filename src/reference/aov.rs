@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use super::hit::Kind;
+use super::surface::AlphaRay;
 use super::{hit, sampling, World};
 use crate::frame::{Aovs, Sampling};
 use crate::scene::{Scene, Shape};
@@ -36,7 +37,7 @@ pub(super) fn aovs(world: &World, scene: &Scene, sampling: &Sampling) -> Aovs {
                 [0.5, 0.5]
             };
             let ray = world.camera.primary_ray(x, y, width, height, sub);
-            hit::closest_hit(world, &ray).map(|h| {
+            hit::closest_hit(world, &ray, AlphaRay::camera(pixel, 0)).map(|h| {
                 let (object, primitive, uv) = match h.kind {
                     Kind::Plane => (planes[h.index as usize], 0, [0.0; 2]),
                     Kind::Sphere => (spheres[h.index as usize], 0, [0.0; 2]),

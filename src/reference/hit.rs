@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use super::bvh::PRIM_SPHERE;
 use super::intersect::{self, Ray, FAR};
-use super::World;
+use super::surface::{self, AlphaRay, Surface};
+use super::{texture, World};
 
 /// Which kind of primitive a hit is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,8 +37,12 @@ pub struct Hit {
     /// Unit geometric normal, turned towards the incoming ray.
     pub geometric_normal: DVec3,
     /// Unit shading normal (interpolated vertex normal where the mesh has
-    /// them), turned towards the incoming ray.
+    /// them, tilted by the normal map where the object has one), turned
+    /// towards the incoming ray.
     pub shading_normal: DVec3,
+    /// Uv, colour, tangent and level of detail at the hit, in scenes with
+    /// textures, vertex colours or surface maps (`None` in the others).
+    pub surface: Option<Surface>,
     /// Index into the scene's shaders.
     pub shader: u32,
     /// Magnitude of the coordinates that went into `position` (its rounding
@@ -46,13 +51,20 @@ pub struct Hit {
 }
 
 /// Nearest hit over every primitive: planes one by one, spheres and
-/// triangles through the BVH. `None` when the ray hits nothing.
-pub fn closest_hit(world: &World, ray: &Ray) -> Option<Hit> {
+/// triangles through the BVH. `None` when the ray hits nothing. In scenes
+/// with `Mask` or `Blend` objects every candidate must pass the alpha test
+/// ([`surface::is_there`]) of `alpha_ray` (a sphere's far side is tried
+/// where its near side is not there); `ray` is a camera ray (the level of
+/// detail of its hit is the primary ray cone's).
+pub fn closest_hit(world: &World, ray: &Ray, alpha_ray: AlphaRay) -> Option<Hit> {
     let mut best: Option<(f64, Kind, u32, f64, f64)> = None;
     let mut t_best = FAR;
+    let there = |kind: Kind, i: u32, t: f64, u: f64, v: f64| {
+        !world.alpha || surface::is_there(world, alpha_ray, kind, i, u, v, ray.at(t))
+    };
     for (i, p) in world.planes.iter().enumerate() {
         let t = intersect::plane(p.point, p.normal, ray);
-        if t > 0.0 && t < t_best {
+        if t > 0.0 && t < t_best && there(Kind::Plane, i as u32, t, 0.0, 0.0) {
             t_best = t;
             best = Some((t, Kind::Plane, i as u32, 0.0, 0.0));
         }
@@ -61,16 +73,30 @@ pub fn closest_hit(world: &World, ray: &Ray) -> Option<Hit> {
         if prim & PRIM_SPHERE != 0 {
             let i = prim & !PRIM_SPHERE;
             let s = &world.spheres[i as usize];
-            let t = intersect::sphere(s.center, s.radius, ray);
-            if t > 0.0 && t < t_max {
-                best = Some((t, Kind::Sphere, i, 0.0, 0.0));
-                return t;
+            if !world.alpha {
+                let t = intersect::sphere(s.center, s.radius, ray);
+                if t > 0.0 && t < t_max {
+                    best = Some((t, Kind::Sphere, i, 0.0, 0.0));
+                    return t;
+                }
+            } else {
+                let (near, far) = intersect::sphere_roots(s.center, s.radius, ray);
+                if near <= far {
+                    for t in [near, far] {
+                        if t > 0.0 && t < t_max && there(Kind::Sphere, i, t, 0.0, 0.0) {
+                            best = Some((t, Kind::Sphere, i, 0.0, 0.0));
+                            return t;
+                        }
+                    }
+                }
             }
         } else if let Some((t, u, v)) =
             intersect::triangle(&world.triangles[prim as usize], ray, t_max)
         {
-            best = Some((t, Kind::Triangle, prim, u, v));
-            return t;
+            if there(Kind::Triangle, prim, t, u, v) {
+                best = Some((t, Kind::Triangle, prim, u, v));
+                return t;
+            }
         }
         t_max
     });
@@ -112,6 +138,23 @@ fn finish_hit(world: &World, ray: &Ray, t: f64, kind: Kind, index: u32, u: f64, 
             (ng, ns, tri.shader)
         }
     };
+    let surface = world.textured.then(|| {
+        let mut s = surface::at(world, kind, index, u, v, p);
+        // The primary ray cone's width at the hit, over the cosine with the
+        // geometric normal, and each uv set's area ratio (Ray Tracing Gems
+        // ch. 20).
+        let cone = texture::cone_width(world.pixel_spread, world.orthographic, t);
+        let cos = ng.dot(ray.dir);
+        s.lod_base = s.uv_per_world.map(|r| texture::lod_base(cone, cos, r));
+        s
+    });
+    if let Some(s) = &surface {
+        let object = surface::object_of(world, kind, index) as usize;
+        if let (Some((t, scale)), Some(tangent)) = (world.objects[object].maps.normal, s.tangent) {
+            let texel = s.sample(world, &t);
+            ns = texture::normal_mapped(ns, tangent, texel.truncate(), f64::from(scale));
+        }
+    }
     if ng.dot(ray.dir) > 0.0 {
         ng = -ng;
     }
@@ -127,6 +170,7 @@ fn finish_hit(world: &World, ray: &Ray, t: f64, kind: Kind, index: u32, u: f64, 
         position: p,
         geometric_normal: ng,
         shading_normal: ns,
+        surface,
         shader,
         error_scale: super::shadows::error_scale(ray.origin, p, t),
     }

@@ -14,7 +14,11 @@
 //!
 //! The files follow the concepts of `shaders/`: [`camera`], [`intersect`] (ray,
 //! plane, sphere, triangle), [`bvh`], [`hit`], [`lights`], [`shading`],
-//! [`shadows`], [`sampling`].
+//! [`shadows`], [`sampling`], and for textures [`texture`] (sampling, level
+//! of detail, uv conventions) and [`surface`] (a point's uv, colour and
+//! tangent, and the alpha tests of traversal). A scene without textures,
+//! vertex colours or surface maps takes none of those paths: its results
+//! are bit for bit what they were before textures.
 //!
 //! # Why it can still differ from the GPU
 //!
@@ -36,6 +40,13 @@
 //! (BVH or brute force, the triangle test, the shadow-ray offset); the
 //! reference always computes the exact version (watertight test in `f64`,
 //! robust shadow rays), which is what they are measured against.
+//!
+//! Textures add decisions of the same kind: a `Nearest` lookup within
+//! rounding of a texel edge, a level of detail within rounding of a
+//! `Nearest` mip switch (λ = k + ½), an alpha within rounding of its
+//! `Mask` cutoff or its `Blend` threshold. Filtered values themselves
+//! differ only by the GPU's arithmetic (`f32`, and the fixed-point filter
+//! weights of a hardware sampler where one is used).
 
 mod aov;
 pub mod bvh;
@@ -46,6 +57,8 @@ pub mod lights;
 pub mod sampling;
 pub mod shading;
 pub mod shadows;
+pub mod surface;
+pub mod texture;
 
 use std::time::Instant;
 
@@ -92,6 +105,24 @@ pub struct World {
     accel: bvh::Accel,
     sampler: Sampler,
     seed: u32,
+    /// Each texture's mip chain, built once here.
+    textures: Vec<texture::Mips>,
+    /// Per scene object: maps and mesh attributes.
+    objects: Vec<surface::ObjectInfo>,
+    /// The object of each plane, sphere and triangle.
+    plane_objects: Vec<u32>,
+    sphere_objects: Vec<u32>,
+    triangle_objects: Vec<u32>,
+    /// Some texture, vertex colour or surface map is in use: hits carry a
+    /// [`surface::Surface`]. Otherwise shading is exactly as without
+    /// textures.
+    textured: bool,
+    /// Some object is `Mask` or `Blend`: traversal tests alpha.
+    alpha: bool,
+    /// What one pixel spans: an angle (perspective) or a world height
+    /// (orthographic), for the ray cone ([`texture::cone_width`]).
+    pixel_spread: f64,
+    orthographic: bool,
 }
 
 impl World {
@@ -101,8 +132,30 @@ impl World {
         let mut spheres = Vec::new();
         let mut triangles = Vec::new();
         let mut vertex_normals = Vec::new();
-        for o in &scene.objects {
+        let textured = !scene.textures.is_empty()
+            || scene.objects.iter().any(|o| {
+                !o.maps.is_none() || matches!(&o.shape, Shape::Mesh(m) if m.colours.is_some())
+            });
+        let (mut objects, mut plane_objects, mut sphere_objects, mut triangle_objects) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (oi, o) in scene.objects.iter().enumerate() {
             let shader = o.shader as u32;
+            objects.push(surface::ObjectInfo {
+                maps: o.maps,
+                first_triangle: triangles.len() as u32,
+                mesh: match &o.shape {
+                    Shape::Mesh(m) if textured => Some(surface::MeshAttributes::new(m)),
+                    _ => None,
+                },
+            });
+            match &o.shape {
+                Shape::Plane(_) => plane_objects.push(oi as u32),
+                Shape::Sphere(_) => sphere_objects.push(oi as u32),
+                Shape::Triangle(_) => triangle_objects.push(oi as u32),
+                Shape::Mesh(m) => {
+                    triangle_objects.extend(std::iter::repeat_n(oi as u32, m.indices.len()))
+                }
+            }
             match &o.shape {
                 Shape::Plane(p) => planes.push(Plane {
                     point: p.point,
@@ -133,7 +186,23 @@ impl World {
             }
         }
         let accel = bvh::Accel::build(&triangles, &spheres);
+        let cam = &scene.camera;
         World {
+            textures: scene.textures.iter().map(texture::Mips::new).collect(),
+            objects,
+            plane_objects,
+            sphere_objects,
+            triangle_objects,
+            textured,
+            alpha: scene
+                .objects
+                .iter()
+                .any(|o| o.maps.alpha_mode != crate::scene::AlphaMode::Opaque),
+            pixel_spread: 2.0 * cam.half_extent().1 / f64::from(cam.height),
+            orthographic: matches!(
+                cam.projection,
+                crate::scene::Projection::Orthographic { .. }
+            ),
             camera: camera::Camera::new(&scene.camera),
             background: scene.background.as_dvec3(),
             planes,
@@ -148,9 +217,10 @@ impl World {
         }
     }
 
-    /// The closest hit of `ray` (for tests and tools).
+    /// The closest hit of `ray` (for tests and tools), taken as a camera
+    /// ray of pixel 0 in pass 0 (its `Blend` decisions and level of detail).
     pub fn closest_hit(&self, ray: &intersect::Ray) -> Option<hit::Hit> {
-        hit::closest_hit(self, ray)
+        hit::closest_hit(self, ray, surface::AlphaRay::camera(0, 0))
     }
 
     /// Colour and alpha of one sample of pixel (`x`, `y`) of a
@@ -175,7 +245,7 @@ impl World {
             [0.5, 0.5]
         };
         let ray = self.camera.primary_ray(x, y, width, height, sub);
-        match hit::closest_hit(self, &ray) {
+        match hit::closest_hit(self, &ray, surface::AlphaRay::camera(pixel, pass)) {
             Some(h) => {
                 let c = shading::shade(self, &ray, &h, pixel, pass, shadow_rays);
                 [c.x, c.y, c.z, 1.0]

@@ -29,6 +29,12 @@ pub fn hash3(a: u32, b: u32, c: u32) -> u32 {
     pcg(a ^ pcg(b ^ pcg(c)))
 }
 
+/// A hash as a number in [0, 1): its 24 high bits times 2⁻²⁴, exactly an
+/// `f32` (the `Blend` alpha test's ξ, [`crate::scene::texture`]).
+pub fn unit_float(h: u32) -> f64 {
+    (h >> 8) as f64 * (1.0 / 16_777_216.0)
+}
+
 /// The 24 high bits of both coordinates of sample `n` of `stream` for
 /// `pixel`: the sample is these times 2⁻²⁴.
 pub fn sample_2d_bits(sampler: Sampler, seed: u32, pixel: u32, stream: u32, n: u32) -> [u32; 2] {

@@ -9,8 +9,9 @@ use super::intersect::Ray;
 use super::lights::sample_light;
 use super::sampling::sample_2d;
 use super::shadows::occluded;
+use super::surface::AlphaRay;
 use super::World;
-use crate::scene::Shader;
+use crate::scene::{PhongTextures, Shader};
 
 /// The lookup point of a checker moves this many cells into the surface
 /// (away from the viewer), so a surface on a cell boundary picks one cell
@@ -39,6 +40,8 @@ pub struct Lobe {
     pub specular: DVec3,
     /// n_s.
     pub shininess: f64,
+    /// The textures that scale k_a, k_d and k_s.
+    pub textures: PhongTextures,
 }
 
 /// Walks down nested checkers to the shading model at `p` (`resolve_shader`;
@@ -61,6 +64,7 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
             diffuse: m.diffuse.as_dvec3(),
             specular: m.specular.as_dvec3(),
             shininess: m.shininess as f64,
+            textures: m.textures,
         },
         // Only a cyclic table (which validation rules out) ends here; the
         // GPU would read the checker node's zero colours. A WGSL shader never
@@ -71,6 +75,7 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
             diffuse: DVec3::ZERO,
             specular: DVec3::ZERO,
             shininess: 0.0,
+            textures: PhongTextures::default(),
         },
     }
 }
@@ -102,10 +107,14 @@ pub fn blinn_phong_lobe(n: DVec3, l: DVec3, v: DVec3, shininess: f64) -> f64 {
     spec_pow((sum / len2.sqrt()).dot(n).max(0.0), shininess)
 }
 
-/// The colour at a hit: per light, `k_a·I_a` once, then per light sample
-/// (skipped where l·n ≤ 0 or the falloff is 0; otherwise one shadow ray,
-/// counted in `shadow_rays`) `falloff·(k_d·I_d·l·n + k_s·I_s·lobe)` if the
-/// sample is visible. `pixel` and `pass` pick the light samples.
+/// The colour at a hit: the emission once, then per light, `k_a·I_a` once,
+/// then per light sample (skipped where l·n ≤ 0 or the falloff is 0;
+/// otherwise one shadow ray, counted in `shadow_rays`)
+/// `falloff·(k_d·I_d·l·n + k_s·I_s·lobe)` if the sample is visible.
+/// `pixel` and `pass` pick the light samples and the shadow rays' `Blend`
+/// decisions. Where the hit has a surface, the Phong node's textures scale
+/// `k_a`, `k_d` and `k_s`, the vertex colour's rgb `k_d`, and the object's
+/// emission (times its texture) is added.
 pub fn shade(
     world: &World,
     ray: &Ray,
@@ -114,15 +123,27 @@ pub fn shade(
     pass: u32,
     shadow_rays: &mut u64,
 ) -> DVec3 {
-    let node = resolve_shader(
+    let mut node = resolve_shader(
         &world.shaders,
         hit.shader,
         hit.position,
         hit.geometric_normal,
     );
+    let mut colour = DVec3::ZERO;
+    if let Some(s) = &hit.surface {
+        let tex = |t: &Option<crate::scene::TextureRef>| {
+            t.map_or(DVec3::ONE, |t| s.sample(world, &t).truncate())
+        };
+        node.ambient *= tex(&node.textures.ambient);
+        node.diffuse *= tex(&node.textures.diffuse) * s.colour.truncate();
+        node.specular *= tex(&node.textures.specular);
+        let object = super::surface::object_of(world, hit.kind, hit.index) as usize;
+        let maps = &world.objects[object].maps;
+        colour += maps.emission.as_dvec3() * tex(&maps.emission_texture);
+    }
     let n = hit.shading_normal;
     let v = -ray.dir;
-    let mut colour = DVec3::ZERO;
+    let shadow_ray = AlphaRay::shadow(pixel, pass);
     for (i, light) in world.lights.iter().enumerate() {
         colour += node.ambient * light.ambient;
         let count = light.samples;
@@ -142,7 +163,7 @@ pub fn shade(
                 continue;
             }
             *shadow_rays += 1;
-            if occluded(world, hit, &ls) {
+            if occluded(world, hit, &ls, shadow_ray) {
                 continue;
             }
             let lobe = if node.blinn {
