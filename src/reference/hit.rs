@@ -52,19 +52,16 @@ pub struct Hit {
 
 /// Nearest hit over every primitive: planes one by one, spheres and
 /// triangles through the BVH. `None` when the ray hits nothing. In scenes
-/// with `Mask` or `Blend` objects every candidate must pass the alpha test
-/// ([`surface::is_there`]) of `alpha_ray` (a sphere's far side is tried
-/// where its near side is not there); `ray` is a camera ray (the level of
-/// detail of its hit is the primary ray cone's).
+/// with `Mask` or `Blend` objects (triangles only: validation) every
+/// candidate triangle must pass the alpha test ([`surface::is_there`]) of
+/// `alpha_ray`; `ray` is a camera ray (the level of detail of its hit is
+/// the primary ray cone's).
 pub fn closest_hit(world: &World, ray: &Ray, alpha_ray: AlphaRay) -> Option<Hit> {
     let mut best: Option<(f64, Kind, u32, f64, f64)> = None;
     let mut t_best = FAR;
-    let there = |kind: Kind, i: u32, t: f64, u: f64, v: f64| {
-        !world.alpha || surface::is_there(world, alpha_ray, kind, i, u, v, ray.at(t))
-    };
     for (i, p) in world.planes.iter().enumerate() {
         let t = intersect::plane(p.point, p.normal, ray);
-        if t > 0.0 && t < t_best && there(Kind::Plane, i as u32, t, 0.0, 0.0) {
+        if t > 0.0 && t < t_best {
             t_best = t;
             best = Some((t, Kind::Plane, i as u32, 0.0, 0.0));
         }
@@ -73,27 +70,15 @@ pub fn closest_hit(world: &World, ray: &Ray, alpha_ray: AlphaRay) -> Option<Hit>
         if prim & PRIM_SPHERE != 0 {
             let i = prim & !PRIM_SPHERE;
             let s = &world.spheres[i as usize];
-            if !world.alpha {
-                let t = intersect::sphere(s.center, s.radius, ray);
-                if t > 0.0 && t < t_max {
-                    best = Some((t, Kind::Sphere, i, 0.0, 0.0));
-                    return t;
-                }
-            } else {
-                let (near, far) = intersect::sphere_roots(s.center, s.radius, ray);
-                if near <= far {
-                    for t in [near, far] {
-                        if t > 0.0 && t < t_max && there(Kind::Sphere, i, t, 0.0, 0.0) {
-                            best = Some((t, Kind::Sphere, i, 0.0, 0.0));
-                            return t;
-                        }
-                    }
-                }
+            let t = intersect::sphere(s.center, s.radius, ray);
+            if t > 0.0 && t < t_max {
+                best = Some((t, Kind::Sphere, i, 0.0, 0.0));
+                return t;
             }
         } else if let Some((t, u, v)) =
             intersect::triangle(&world.triangles[prim as usize], ray, t_max)
         {
-            if there(Kind::Triangle, prim, t, u, v) {
+            if !world.alpha || surface::is_there(world, alpha_ray, prim, u, v, ray.at(t)) {
                 best = Some((t, Kind::Triangle, prim, u, v));
                 return t;
             }

@@ -34,9 +34,9 @@ use super::World;
 pub const OFFSET_SCALE: f64 = 1.0 / 4_294_967_296.0;
 
 /// Whether anything blocks the light sample `ls` from `hit`. In scenes
-/// with `Mask` or `Blend` objects a blocker must pass the alpha test of
-/// `alpha_ray` ([`surface::is_there`]; any of a sphere's two crossings may
-/// block).
+/// with `Mask` or `Blend` objects (triangles only: validation) a blocking
+/// triangle must pass the alpha test of `alpha_ray`
+/// ([`surface::is_there`]).
 pub fn occluded(world: &World, hit: &Hit, ls: &LightSample, alpha_ray: AlphaRay) -> bool {
     // (shade() only asks for lights above the geometric surface.)
     let origin = if hit.kind == Kind::Triangle {
@@ -51,60 +51,35 @@ pub fn occluded(world: &World, hit: &Hit, ls: &LightSample, alpha_ray: AlphaRay)
             continue;
         }
         let t = intersect::plane(p.point, p.normal, &ray);
-        if t > 0.0 && t < t_max && there(world, alpha_ray, Kind::Plane, i as u32, &ray, t, 0.0, 0.0)
-        {
+        if t > 0.0 && t < t_max {
             return true;
         }
     }
     world.accel.any(&ray, t_max, |prim| {
         if prim & PRIM_SPHERE != 0 {
-            sphere_blocks(world, prim & !PRIM_SPHERE, &ray, t_max, hit, alpha_ray)
+            sphere_blocks(world, prim & !PRIM_SPHERE, &ray, t_max, hit)
         } else {
             !(hit.kind == Kind::Triangle && hit.index == prim)
                 && intersect::triangle(&world.triangles[prim as usize], &ray, t_max).is_some_and(
-                    |(t, u, v)| there(world, alpha_ray, Kind::Triangle, prim, &ray, t, u, v),
+                    |(t, u, v)| {
+                        !world.alpha || surface::is_there(world, alpha_ray, prim, u, v, ray.at(t))
+                    },
                 )
         }
     })
 }
 
-/// Whether the crossing at `t` of `ray` with primitive `index` of `kind`
-/// (barycentrics `u`, `v`) is there: always in scenes without alpha.
-#[allow(clippy::too_many_arguments)]
-fn there(
-    world: &World,
-    alpha_ray: AlphaRay,
-    kind: Kind,
-    index: u32,
-    ray: &Ray,
-    t: f64,
-    u: f64,
-    v: f64,
-) -> bool {
-    !world.alpha || surface::is_there(world, alpha_ray, kind, index, u, v, ray.at(t))
-}
-
 /// Whether sphere `i` blocks the shadow ray that leaves `start`.
-fn sphere_blocks(
-    world: &World,
-    i: u32,
-    ray: &Ray,
-    t_max: f64,
-    start: &Hit,
-    alpha_ray: AlphaRay,
-) -> bool {
+fn sphere_blocks(world: &World, i: u32, ray: &Ray, t_max: f64, start: &Hit) -> bool {
     let s = &world.spheres[i as usize];
-    let there = |t: f64| there(world, alpha_ray, Kind::Sphere, i, ray, t, 0.0, 0.0);
     if start.kind == Kind::Sphere && start.index == i {
         let into = ray.dir.dot(s.center - start.position);
-        // The chord's far end, where a cut-out sphere may let the ray out.
-        return into > 0.0 && 2.0 * into < t_max && there(2.0 * into);
+        return into > 0.0 && 2.0 * into < t_max;
     }
     let (near, far) = intersect::sphere_roots(s.center, s.radius, ray);
     // Either root inside (0, t_max) blocks; a ray starting inside a sphere
     // is blocked by its far side.
-    near <= far
-        && ((near > 0.0 && near < t_max && there(near)) || (far > 0.0 && far < t_max && there(far)))
+    near <= far && ((near > 0.0 && near < t_max) || (far > 0.0 && far < t_max))
 }
 
 /// The magnitude the rounding error of a hit point scales with.

@@ -3,7 +3,7 @@
 //! (a triangle's interpolated uv sets, a plane's planar and a sphere's
 //! latitude-longitude coordinates), the uv area per world area that the
 //! level of detail needs, the vertex colour and tangent; and the alpha
-//! tests (`Mask`, `Blend`) that traversal runs on every candidate hit.
+//! tests (`Mask`, `Blend`) that traversal runs on every candidate triangle.
 
 use glam::{DVec2, DVec3, DVec4, Vec4};
 
@@ -187,34 +187,23 @@ pub fn alpha(world: &World, maps: &SurfaceMaps, s: &Surface) -> f64 {
     f64::from(maps.opacity) * tex * s.colour.w
 }
 
-/// `Blend`'s threshold ξ for `primitive` (its index in its own list) on
+/// `Blend`'s threshold ξ for triangle `primitive` (in the GPU's order) on
 /// `ray`: `unit_float(hash3(pixel, primitive, seed ^ stream))`.
 pub fn blend_threshold(seed: u32, ray: AlphaRay, primitive: u32) -> f64 {
     unit_float(hash3(ray.pixel, primitive, seed ^ ray.stream))
 }
 
-/// Whether the point `p` (barycentrics `u`, `v`) of primitive `index` of
-/// `kind` is there for `ray`: always for `Opaque`, where alpha ≥ cutoff for
-/// `Mask`, where alpha > ξ for `Blend`.
-pub fn is_there(
-    world: &World,
-    ray: AlphaRay,
-    kind: Kind,
-    index: u32,
-    u: f64,
-    v: f64,
-    p: DVec3,
-) -> bool {
-    let maps = &world.objects[object_of(world, kind, index) as usize].maps;
+/// Whether the point `p` (barycentrics `u`, `v`) of triangle `index` (in
+/// the GPU's order) is there for `ray`: always for `Opaque`, where alpha ≥
+/// cutoff for `Mask`, where alpha > ξ for `Blend`. (Only triangles have an
+/// alpha test: validation keeps planes and spheres opaque.)
+pub fn is_there(world: &World, ray: AlphaRay, index: u32, u: f64, v: f64, p: DVec3) -> bool {
+    let maps = &world.objects[world.triangle_objects[index as usize] as usize].maps;
+    let alpha = || alpha(world, maps, &at(world, Kind::Triangle, index, u, v, p));
     match maps.alpha_mode {
         AlphaMode::Opaque => true,
-        AlphaMode::Mask { cutoff } => {
-            alpha(world, maps, &at(world, kind, index, u, v, p)) >= f64::from(cutoff)
-        }
-        AlphaMode::Blend => {
-            alpha(world, maps, &at(world, kind, index, u, v, p))
-                > blend_threshold(world.seed, ray, index)
-        }
+        AlphaMode::Mask { cutoff } => alpha() >= f64::from(cutoff),
+        AlphaMode::Blend => alpha() > blend_threshold(world.seed, ray, index),
     }
 }
 
@@ -571,38 +560,5 @@ mod tests {
         let h = w.closest_hit(&r).unwrap();
         let got = shade(&w, &r, &h, 0, 0, &mut rays);
         assert!((got - Vec3::new(0.1, 0.2, 0.3).as_dvec3() * dec(te)).length() < 1e-12);
-    }
-
-    #[test]
-    fn a_cut_out_sphere_shows_its_far_side() {
-        // Lat-long u < ½ (the +Z side's quarter at u = ¼) is cut out; the
-        // far side at −Z (u = ¾) is there.
-        let mut t = TextureRef::new(0);
-        t.sampler.mag = Filter::Nearest;
-        let maps = SurfaceMaps {
-            alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-            opacity_texture: Some(t),
-            ..SurfaceMaps::NONE
-        };
-        let ball = Shape::Sphere(crate::scene::Sphere {
-            center: DVec3::ZERO,
-            radius: 1.0,
-        });
-        let s = scene(
-            vec![object(ball, maps)],
-            vec![texture(2, 1, vec![[0, 0, 0, 0], [0, 0, 0, 255]], false)],
-            vec![],
-        );
-        let w = world(&s);
-        let h = w
-            .closest_hit(&Ray::new(DVec3::new(0.0, 0.0, 5.0), -DVec3::Z))
-            .unwrap();
-        assert_eq!((h.kind, h.t), (Kind::Sphere, 6.0));
-        assert!((h.surface.unwrap().uv[0] - DVec2::new(0.75, 0.5)).length() < 1e-15);
-        // From −Z the near side is there.
-        let h = w
-            .closest_hit(&Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z))
-            .unwrap();
-        assert_eq!(h.t, 4.0);
     }
 }

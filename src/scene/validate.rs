@@ -446,7 +446,7 @@ fn per_vertex<T>(
 
 /// The surface maps of object `i`: textures among the `nt`, a finite
 /// normal scale (and tangents to tilt along), finite non-negative emission,
-/// opacity in [0, 1], a finite mask cutoff.
+/// opacity in [0, 1], alpha tests only on triangles, a finite mask cutoff.
 fn maps(i: usize, m: &SurfaceMaps, shape: &Shape, nt: usize) -> Result<(), Invalid> {
     let f = |k: &str| format!("objects[{i}].maps.{k}");
     if let Some((t, scale)) = &m.normal {
@@ -477,6 +477,12 @@ fn maps(i: usize, m: &SurfaceMaps, shape: &Shape, nt: usize) -> Result<(), Inval
     }
     if let Some(t) = &m.opacity_texture {
         texture_ref(&f("opacity_texture"), t, nt)?;
+    }
+    if m.alpha_mode != AlphaMode::Opaque && matches!(shape, Shape::Plane(_) | Shape::Sphere(_)) {
+        return Err(Invalid::new(
+            f("alpha_mode"),
+            "only meshes and triangles can be masked or blended; planes and spheres are opaque",
+        ));
     }
     if let AlphaMode::Mask { cutoff } = m.alpha_mode {
         if !cutoff.is_finite() {
@@ -823,6 +829,34 @@ mod tests {
     }
 
     #[test]
+    fn only_triangles_are_masked_or_blended() {
+        let plane = Shape::Plane(crate::scene::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Y,
+        });
+        let sphere = Shape::Sphere(crate::scene::Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        });
+        for shape in [plane, sphere] {
+            for mode in [AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend] {
+                let shape = shape.clone();
+                refused("objects[0].maps.alpha_mode", move |s| {
+                    s.objects[0].shape = shape;
+                    s.objects[0].maps.normal = None;
+                    s.objects[0].maps.alpha_mode = mode;
+                });
+            }
+            // Opaque, with emission and textures, is fine.
+            let mut s = textured();
+            s.objects[0].shape = shape;
+            s.objects[0].maps.normal = None;
+            s.objects[0].maps.alpha_mode = AlphaMode::Opaque;
+            assert_eq!(s.validate(), Ok(()));
+        }
+    }
+
+    #[test]
     fn normal_maps_need_tangents() {
         refused("objects[0].maps.normal", |s| mesh(s).tangents = None);
         refused("objects[0].maps.normal", |s| {
@@ -831,6 +865,7 @@ mod tests {
             });
         });
         // Without a normal map a triangle with the other maps is fine.
+        // (The mask stays: triangles can be cut out.)
         let mut s = textured();
         s.objects[0].shape = Shape::Triangle(Triangle {
             vertices: [DVec3::ZERO, DVec3::X, DVec3::Y],
