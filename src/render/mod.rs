@@ -302,6 +302,8 @@ pub struct Renderer {
     stage_memory: u64,
     /// The largest image band, at most the device's buffer binding.
     band_bytes: u64,
+    /// A cap on texture bytes below the device's (tests).
+    texture_capacity: u64,
     shaders: ShaderSource,
     kernel: KernelOptions,
     context: Context,
@@ -349,6 +351,7 @@ impl Renderer {
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             band_bytes: u64::MAX,
+            texture_capacity: u64::MAX,
             shaders: opts.shaders.clone(),
             kernel: opts.kernel,
             context,
@@ -383,6 +386,13 @@ impl Renderer {
     /// cap means more bands and the same image.
     pub fn set_image_band_bytes(&mut self, bytes: u64) {
         self.band_bytes = bytes;
+    }
+
+    /// Caps the bytes the scene's textures may take below the device's
+    /// limit, so that the limit's error can be shown without a gigabyte of
+    /// textures (tests); `u64::MAX` restores the device's.
+    pub fn set_texture_capacity(&mut self, bytes: u64) {
+        self.texture_capacity = bytes;
     }
 
     /// The device in use.
@@ -613,6 +623,39 @@ impl Renderer {
     /// than one buffer binding is no limit: it is kept in bands of rows
     /// ([`ImageBands`]).
     /// Without `whole`, only the workgroup counts (parts check their rows).
+    /// All textures share one texel image: they must fit the device's
+    /// `maxImageDimension2D` rows of [`crate::vulkan::TEXEL_ROW`] texels (four
+    /// texture texels each) and its largest allocation. The error names the
+    /// first texture that does not fit.
+    fn check_textures(&self, scene: &Scene) -> Result<(), RenderError> {
+        let limits = self.context.limits();
+        let capacity = (u64::from(crate::vulkan::TEXEL_ROW)
+            * u64::from(limits.max_image_dimension_2d)
+            * crate::vulkan::TEXEL_BYTES as u64)
+            .min(limits.max_memory_allocation_size)
+            .min(self.texture_capacity);
+        let mut total = 0u64;
+        for (i, t) in scene.textures.iter().enumerate() {
+            total += t
+                .device_bytes()
+                .next_multiple_of(crate::vulkan::TEXEL_BYTES as u64);
+            if total > capacity {
+                return Err(RenderError::Scene {
+                    field: format!("textures[{i}] ({})", t.label),
+                    message: format!(
+                        "the scene's textures with their mip-maps need {:.1} MiB up to this one, more than the {:.1} MiB this device's texture image holds (maxImageDimension2D {} rows of {} texels, maxMemoryAllocationSize {})",
+                        total as f64 / 1048576.0,
+                        capacity as f64 / 1048576.0,
+                        limits.max_image_dimension_2d,
+                        crate::vulkan::TEXEL_ROW * 4,
+                        limits.max_memory_allocation_size
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
     fn check_size(&self, width: u32, height: u32, whole: bool) -> Result<(), RenderError> {
         let limits = self.context.limits();
         let bytes = width as u64 * height as u64 * bands::PIXEL_BYTES;
@@ -670,6 +713,7 @@ impl Renderer {
         self.reuse_hits = false;
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height, whole)?;
+        self.check_textures(scene)?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let materials =

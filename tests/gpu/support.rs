@@ -32,6 +32,7 @@ pub fn renderer() -> std::sync::MutexGuard<'static, Renderer> {
         guard.set_kernel(RendererOptions::default().kernel);
         guard.set_stage_memory(penumbra::render::tiles::DEFAULT_STAGE_MEMORY);
         guard.set_image_band_bytes(u64::MAX);
+        guard.set_texture_capacity(u64::MAX);
         guard
     })
 }

@@ -669,3 +669,32 @@ fn blending_is_deterministic_and_converges() {
         mean / lit
     );
 }
+
+/// Textures beyond what the device's texture image holds: one error naming
+/// the texture that crosses the limit, and the limit (the cap stands in for
+/// a device with less room, so that the test needs no gigabyte of texels).
+#[test]
+fn textures_beyond_the_device_limit_name_the_texture() {
+    let use_ = TextureRef::new(0);
+    let mut s = scene(
+        quad(DVec2::ONE),
+        8,
+        use_,
+        vec![texture(true), texture(true)],
+    );
+    s.textures[1].label = "second.png".into();
+    s.objects[0].maps.emission = Vec3::ONE;
+    s.objects[0].maps.emission_texture = Some(TextureRef::new(1));
+    s.validate().unwrap();
+    let mut r = support::renderer();
+    // Each 4×4 texture takes 16 + 4 + 1 texels of 4 bytes: 84 bytes, 96 as
+    // whole 16-byte texels; the cap fits the first only.
+    r.set_texture_capacity(100);
+    let err = r.upload(&s).map(|_| ()).unwrap_err().to_string();
+    r.set_texture_capacity(u64::MAX);
+    let fits = r.upload(&s).map(|_| ());
+    drop(r);
+    assert!(err.contains("textures[1] (second.png)"), "{err}");
+    assert!(err.contains("maxImageDimension2D"), "{err}");
+    fits.unwrap();
+}
