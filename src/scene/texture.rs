@@ -70,7 +70,9 @@
 //!   viewer) and the interpolated tangent `(T, w)` (both as interpolated,
 //!   not renormalised before this formula): `T' = normalize(T − n(n·T))`,
 //!   `B = w·(n × T')`, the new normal `normalize(t_x·T' + t_y·B + t_z·n)`,
-//!   then turned to face the viewer like any shading normal. It is sampled
+//!   then turned to face the viewer like any shading normal; where
+//!   `|T − n(n·T)|² ≤ 1e-20` (a zero tangent, as generated for a mesh
+//!   without uvs, or one along `n`) the normal stays `n`. It is sampled
 //!   at the primary hit's λ. Only meshes with [`crate::scene::Mesh::tangents`]
 //!   can have a normal map (`Scene::validate` refuses it elsewhere).
 //! - **Emission** `emission × texture.rgb` is added once to each sample's
