@@ -189,16 +189,23 @@ pub fn sphere_uv(center: DVec3, radius: f64, p: DVec3) -> (DVec2, f64) {
 /// viewer) and tangent `tangent` (xyz and the bitangent sign in w):
 /// `t = normalize((2r − 1)·s, (2g − 1)·s, 2b − 1)`,
 /// `T' = normalize(T − n(n·T))`, `B = w·(n × T')`, and
-/// `normalize(t_x·T' + t_y·B + t_z·n)`. Returns `n` where the result is
-/// not a direction (a tangent along the normal, a zero texel).
+/// `normalize(t_x·T' + t_y·B + t_z·n)`. Returns `n` where there is no
+/// tangent direction (`|T − n(n·T)|² ≤ 1e-20`: a zero tangent, as
+/// generated for a mesh without uvs, or one along `n`), and where the
+/// tilted normal is zero.
 pub fn normal_mapped(n: DVec3, tangent: DVec4, rgb: DVec3, scale: f64) -> DVec3 {
     let t = 2.0 * rgb - DVec3::ONE;
     let t = DVec3::new(t.x * scale, t.y * scale, t.z).normalize_or_zero();
     let tan = tangent.truncate();
-    let tp = (tan - n * n.dot(tan)).normalize_or_zero();
+    let tn = tan - n * n.dot(tan);
+    let len2 = tn.dot(tn);
+    if len2.is_nan() || len2 <= 1e-20 {
+        return n;
+    }
+    let tp = tn / len2.sqrt();
     let b = tangent.w * n.cross(tp);
     let m = (t.x * tp + t.y * b + t.z * n).normalize_or_zero();
-    if m == DVec3::ZERO || tp == DVec3::ZERO {
+    if m == DVec3::ZERO {
         n
     } else {
         m
@@ -491,6 +498,12 @@ mod tests {
         assert!((m - DVec3::new(0.0, th.sin(), th.cos())).length() < 1e-12);
         let m = normal_mapped(n, DVec4::new(1.0, 0.0, 0.0, -1.0), green, 1.0);
         assert!((m - DVec3::new(0.0, -th.sin(), th.cos())).length() < 1e-12);
+        // No tangent (zeros, or along n): n stays.
+        assert_eq!(normal_mapped(n, DVec4::ZERO, rgb, 1.0), n);
+        assert_eq!(
+            normal_mapped(n, DVec4::new(0.0, 0.0, 3.0, 1.0), rgb, 1.0),
+            n
+        );
         // The flat texel (½, ½, 1) leaves n.
         let m = normal_mapped(
             n,
