@@ -489,7 +489,7 @@ fn perspective_camera() {
     assert_eq!(size(&doc, Some(300), Some(300)), (300, 300));
     let loaded = load_doc(&doc, &LoadOptions::default());
     assert_eq!(loaded.scene.camera.orientation, cam.orientation);
-    assert_eq!(notes_with(&loaded.notes, "camera"), 0);
+    assert_eq!(notes_with(&loaded.notes, "no camera"), 0);
 }
 
 #[test]
@@ -617,12 +617,9 @@ fn materials_become_distinct_shaders_and_no_material_is_white() {
     let pos = doc.vec3(&TRI);
     doc.root["materials"] = json!([
         { "pbrMetallicRoughness": { "baseColorFactor": [1, 0, 0, 0.5] } },
-        { "pbrMetallicRoughness": { "baseColorFactor": [0, 1, 0, 1], "baseColorTexture": { "index": 0 } } },
+        { "pbrMetallicRoughness": { "baseColorFactor": [0, 1, 0, 1], "metallicFactor": 0 } },
         { "pbrMetallicRoughness": { "baseColorFactor": [1, 0, 0, 1] } }
     ]);
-    // The image does not exist: images must not be loaded.
-    doc.root["textures"] = json!([{ "source": 0 }]);
-    doc.root["images"] = json!([{ "uri": "missing.png" }]);
     doc.mesh_node(
         json!([
             { "attributes": { "POSITION": pos }, "material": 0 },
@@ -638,13 +635,15 @@ fn materials_become_distinct_shaders_and_no_material_is_white() {
         colours,
         vec![Some(Vec3::X), Some(Vec3::Y), Some(Vec3::X), None]
     );
+    // glTF's default metallicFactor 1 is a metal: named once for the two
+    // materials that have it.
     assert_eq!(
-        notes_with(
-            &read.notes,
-            "textures are not applied; baseColorFactor only"
-        ),
-        1
+        notes_with(&read.notes, "metallic-roughness"),
+        1,
+        "{:?}",
+        read.notes
     );
+    assert_eq!(read.notes.len(), 1, "{:?}", read.notes);
 
     let scene = load_doc(&doc, &LoadOptions::default()).scene;
     let diffuse: Vec<_> = scene
@@ -742,7 +741,10 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
             "{notes:?}"
         );
         assert_eq!(
-            notes_with(notes, ": using a default directional light"),
+            notes_with(
+                notes,
+                ": using default lights placed relative to the camera"
+            ),
             1,
             "{notes:?}"
         );
@@ -775,20 +777,61 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
         );
         let from = (cam.position - (lo + hi) * 0.5).normalize();
         assert_close(from, DVec3::new(1.0, 0.6, 1.4).normalize(), 1e-12);
-        let light = &loaded.scene.lights[0];
-        let o = cam.orientation;
-        let expected = (-o.col(2) - o.col(1) - 0.5 * o.col(0)).normalize();
-        assert_eq!(
-            light.kind,
-            LightKind::Directional {
-                direction: expected
-            }
-        );
-        assert_eq!(
-            (light.intensity, light.ambient, light.diffuse),
-            (1.0, Vec3::ZERO, Vec3::ONE)
-        );
+        check_default_lights(&loaded.scene);
     }
+}
+
+/// The default lights follow the camera: a key light travelling along the
+/// view, downwards and across from over the camera's shoulder, and a weaker
+/// fill travelling nearly along the view.
+fn check_default_lights(scene: &penumbra::scene::Scene) {
+    let o = scene.camera.orientation;
+    let (right, up, forward) = (o.col(0), o.col(1), -o.col(2));
+    assert_eq!(scene.lights.len(), 2, "{:?}", scene.lights);
+    let dirs: Vec<DVec3> = scene
+        .lights
+        .iter()
+        .map(|l| match l.kind {
+            LightKind::Directional { direction } => direction,
+            k => panic!("{k:?}"),
+        })
+        .collect();
+    let (key, fill) = (dirs[0], dirs[1]);
+    // Key: from above (travels down), behind (along the view), from the side.
+    assert!(key.dot(forward) > 0.7 && key.dot(up) < -0.3, "{key}");
+    assert!(key.dot(right).abs() > 0.1, "{key}");
+    // Fill: within 15° of the view, from the other side than the key.
+    assert!(fill.dot(forward) > 15f64.to_radians().cos(), "{fill}");
+    assert!(fill.dot(right) * key.dot(right) < 0.0, "{fill} {key}");
+    let (k, f) = (&scene.lights[0], &scene.lights[1]);
+    assert!(k.intensity > f.intensity && f.intensity > 0.0);
+    for l in [k, f] {
+        assert_eq!((l.ambient, l.diffuse), (Vec3::ZERO, Vec3::ONE));
+        match l.kind {
+            LightKind::Directional { direction } => {
+                assert!((direction.length() - 1.0).abs() < 1e-12)
+            }
+            _ => unreachable!(),
+        }
+    }
+}
+
+#[test]
+fn a_file_with_a_camera_and_no_lights_is_lit_from_that_camera() {
+    // The camera looks up at the triangle from below and behind: a light
+    // fixed in the world (as before) would light its far side.
+    let mut doc = triangle_doc(json!({}));
+    doc.push(
+        "cameras",
+        json!({ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } }),
+    );
+    // Rotated 180° about X: looks along +Z with up −Y, from z = −5.
+    doc.root_node(json!({ "camera": 0, "translation": [0.3, 0.3, -5], "rotation": [1, 0, 0, 0] }));
+    let loaded = load_doc(&doc, &LoadOptions::default());
+    assert_close(-loaded.scene.camera.orientation.col(2), DVec3::Z, 1e-12);
+    check_default_lights(&loaded.scene);
+    assert_eq!(notes_with(&loaded.notes, "relative to the camera"), 1);
+    assert_eq!(notes_with(&loaded.notes, "no camera"), 0);
 }
 
 #[test]
@@ -1005,7 +1048,9 @@ fn bunny_glb() {
     assert_eq!(loaded.scene.objects.len(), 1);
     assert_eq!(notes_with(&loaded.notes, "no camera in"), 1);
     assert_eq!(notes_with(&loaded.notes, "no lights in"), 1);
+    // Metallic 0 and roughness 1: the diffuse surface Phong draws, no note.
     assert_eq!(loaded.notes.len(), 2, "{:?}", loaded.notes);
+    check_default_lights(&loaded.scene);
     let c = loaded.scene.camera;
     assert_eq!((c.width, c.height), (1024, 768));
     let read = gltf::read(Path::new(BUNNY)).unwrap();
@@ -1072,10 +1117,28 @@ fn feature_doc() -> Doc {
         "values": { "bufferView": sparse_values }
     });
     doc.root["bufferViews"][nrm]["byteStride"] = json!(12);
+    // Textures, a normal map (tangents generated) and every attribute kind.
+    let uv = doc.accessor(&[0, 0, 255, 0, 0, 255, 255, 255], 5121, 4, "VEC2", true);
+    let colour = doc.accessor(&[255; 16], 5121, 4, "VEC4", true);
+    let image = doc.view(&png(2, 2));
+    let normal_image = doc.view(&png(1, 1));
+    doc.root["images"] = json!([
+        { "bufferView": image, "mimeType": "image/png" },
+        { "bufferView": normal_image, "mimeType": "image/png" }
+    ]);
+    doc.root["samplers"] = json!([{ "magFilter": 9728, "minFilter": 9986, "wrapS": 33071 }]);
+    doc.root["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 1 }]);
+    doc.root["materials"] = json!([{
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "texCoord": 0 } },
+        "normalTexture": { "index": 1, "texCoord": 0 },
+        "emissiveTexture": { "index": 0, "texCoord": 0 },
+        "alphaMode": "MASK"
+    }]);
     doc.mesh_node(
         json!([
-            { "attributes": { "POSITION": pos, "NORMAL": nrm }, "indices": ix },
-            { "attributes": { "POSITION": pos }, "mode": 5 }
+            { "attributes": { "POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv, "COLOR_0": colour },
+              "indices": ix, "material": 0 },
+            { "attributes": { "POSITION": pos, "TEXCOORD_0": uv }, "mode": 5, "material": 0 }
         ]),
         json!({ "scale": [1, -1, 1] }),
     );
@@ -1171,4 +1234,554 @@ fn escaped_uris_and_a_missing_glb_chunk() {
     std::fs::write(&path, glb(root.to_string().as_bytes(), &[])).unwrap();
     let err = gltf::read(&path).unwrap_err();
     assert_eq!(err.field, "buffers[0]", "{err}");
+}
+
+// ---------------------------------------------------------------------------
+// Materials, textures, samplers and vertex attributes (issue 14).
+
+use penumbra::loaders::guard::Guard;
+use penumbra::scene::{AlphaMode, Filter, Sampler, TextureRef, UvTransform, Wrap};
+
+/// A PNG of `w × h` texels, texel (x, y) = (x, y, 7, 200 + x).
+fn png(w: u32, h: u32) -> Vec<u8> {
+    let img = image::RgbaImage::from_fn(w, h, |x, y| {
+        image::Rgba([x as u8, y as u8, 7, 200u8.wrapping_add(x as u8)])
+    });
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
+fn png_uri(w: u32, h: u32) -> String {
+    format!("data:image/png;base64,{}", base64(&png(w, h)))
+}
+
+impl Doc {
+    /// An accessor of `count` elements over these bytes.
+    fn accessor(&mut self, bytes: &[u8], ty: u32, count: usize, kind: &str, norm: bool) -> usize {
+        let view = self.view(bytes);
+        self.push(
+            "accessors",
+            json!({ "bufferView": view, "componentType": ty, "count": count, "type": kind,
+                    "normalized": norm }),
+        )
+    }
+
+    fn floats(&mut self, data: &[f32], kind: &str, n: usize) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.accessor(&bytes, 5126, data.len() / n, kind, false)
+    }
+}
+
+const QUAD: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [0.0, 1.0, 0.0],
+];
+
+/// A quad with normals and TEXCOORD_0 (float) on one primitive per
+/// material given.
+fn material_doc(materials: Value) -> Doc {
+    let mut doc = Doc::new();
+    let pos = doc.vec3(&QUAD);
+    let nrm = doc.vec3(&[[0.0, 0.0, 1.0]; 4]);
+    let uv = doc.floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0], "VEC2", 2);
+    let ix = doc.indices_u16(&[0, 1, 2, 0, 2, 3]);
+    let n = materials.as_array().unwrap().len();
+    let prims: Vec<Value> = (0..n)
+        .map(|m| {
+            json!({ "attributes": { "POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv },
+                    "indices": ix, "material": m })
+        })
+        .collect();
+    doc.root["materials"] = materials;
+    doc.mesh_node(json!(prims), json!({}));
+    doc
+}
+
+fn phong_of(scene: &penumbra::scene::Scene, object: usize) -> penumbra::scene::Phong {
+    match &scene.shaders[scene.objects[object].shader] {
+        Shader::Phong(p) => *p,
+        s => panic!("{s:?}"),
+    }
+}
+
+#[test]
+fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
+    let mut doc = material_doc(json!([
+        {
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.5, 0.25, 1, 0.75],
+                "baseColorTexture": { "index": 0, "texCoord": 1, "extensions": {
+                    "KHR_texture_transform": { "offset": [0.5, 0], "rotation": 0.5, "scale": [2, 3] } } },
+                "metallicFactor": 0
+            },
+            "normalTexture": { "index": 1, "scale": 0.5 },
+            "emissiveFactor": [1, 0.5, 0],
+            "emissiveTexture": { "index": 0 },
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4 } },
+            "alphaMode": "MASK", "alphaCutoff": 0.3
+        },
+        { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0 },
+          "alphaMode": "BLEND" },
+        { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0 } },
+        { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0 },
+          "alphaMode": "MASK", "occlusionTexture": { "index": 0 } }
+    ]));
+    // Texture 1 shows the same image as texture 0, as a normal map.
+    doc.root["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 0 }]);
+    doc.root["samplers"] =
+        json!([{ "magFilter": 9728, "minFilter": 9986, "wrapS": 33071, "wrapT": 33648 }]);
+    doc.root["images"] = json!([{ "uri": png_uri(3, 2) }]);
+    doc.root["extensionsUsed"] = json!([
+        "KHR_texture_transform",
+        "KHR_materials_emissive_strength",
+        "KHR_materials_clearcoat"
+    ]);
+    let loaded = load_doc(&doc, &LoadOptions::default());
+    let scene = &loaded.scene;
+
+    // One texture per (image, colour space), labelled with the file.
+    assert_eq!(scene.textures.len(), 2);
+    let (colour, normal) = (&scene.textures[0], &scene.textures[1]);
+    assert!(colour.srgb && !normal.srgb);
+    assert_eq!(colour.label, "model.glb images[0]");
+    assert_eq!(
+        (colour.width, colour.height, colour.file.clone()),
+        (3, 2, None)
+    );
+    assert_eq!(colour.texels[4], [1, 1, 7, 201]);
+    assert_eq!(normal.texels, colour.texels);
+
+    let sampler = Sampler {
+        mag: Filter::Nearest,
+        min: Filter::Nearest,
+        mip: Some(Filter::Linear),
+        wrap_u: Wrap::ClampToEdge,
+        wrap_v: Wrap::MirroredRepeat,
+    };
+    let base = TextureRef {
+        texture: 0,
+        sampler,
+        tex_coord: 1,
+        transform: UvTransform {
+            offset: glam::DVec2::new(0.5, 0.0),
+            rotation: 0.5,
+            scale: glam::DVec2::new(2.0, 3.0),
+        },
+    };
+    let p = phong_of(scene, 0);
+    assert_eq!(p.diffuse, Vec3::new(0.5, 0.25, 1.0));
+    assert_eq!(
+        (p.ambient, p.specular, p.shininess),
+        (Vec3::ZERO, Vec3::ZERO, 1.0)
+    );
+    assert_eq!(p.textures.diffuse, Some(base));
+    assert_eq!((p.textures.ambient, p.textures.specular), (None, None));
+    let maps = &scene.objects[0].maps;
+    assert_eq!(maps.normal, Some((TextureRef::new(1), 0.5)));
+    assert_eq!(maps.emission, Vec3::new(4.0, 2.0, 0.0));
+    assert_eq!(
+        maps.emission_texture,
+        Some(TextureRef {
+            sampler,
+            ..TextureRef::new(0)
+        })
+    );
+    assert_eq!(maps.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
+    assert_eq!(maps.opacity, 0.75);
+    assert_eq!(maps.opacity_texture, Some(base));
+
+    // BLEND and OPAQUE; MASK with the default cutoff.
+    let plain = Some(TextureRef {
+        sampler,
+        ..TextureRef::new(0)
+    });
+    let m = &scene.objects[1].maps;
+    assert_eq!(
+        (m.alpha_mode, m.opacity, m.opacity_texture),
+        (AlphaMode::Blend, 1.0, plain)
+    );
+    let m = &scene.objects[2].maps;
+    assert_eq!((m.alpha_mode, m.opacity_texture), (AlphaMode::Opaque, None));
+    assert_eq!(
+        scene.objects[3].maps.alpha_mode,
+        AlphaMode::Mask { cutoff: 0.5 }
+    );
+    // Materials 1 to 3 are the same Phong shader; their maps differ.
+    let ids: Vec<_> = scene.objects.iter().map(|o| o.shader).collect();
+    assert_eq!(ids, vec![0, 1, 1, 1]);
+    assert_eq!(scene.shaders.len(), 2);
+
+    // The normal-mapped quad got MikkTSpace tangents: +X, w = +1 (its v
+    // runs down the image, its bitangent up it).
+    let Shape::Mesh(mesh) = &scene.objects[0].shape else {
+        panic!()
+    };
+    let t = mesh.tangents.as_ref().expect("generated tangents");
+    assert_eq!(t.len(), mesh.positions.len());
+    for t in t {
+        assert!(
+            (t.truncate() - DVec3::X).length() < 1e-6 && t.w == 1.0,
+            "{t}"
+        );
+    }
+    let Shape::Mesh(plain_mesh) = &scene.objects[2].shape else {
+        panic!()
+    };
+    assert!(plain_mesh.tangents.is_none(), "no normal map, no tangents");
+
+    // Each unsupported feature named once.
+    let notes = &loaded.notes;
+    assert_eq!(
+        notes_with(notes, "KHR_materials_clearcoat is not supported"),
+        1,
+        "{notes:?}"
+    );
+    assert_eq!(
+        notes_with(notes, "occlusionTexture is not applied"),
+        1,
+        "{notes:?}"
+    );
+    assert_eq!(notes_with(notes, "metallic-roughness"), 0, "{notes:?}");
+    assert_eq!(notes_with(notes, "KHR_texture_transform"), 0, "{notes:?}");
+    assert_eq!(notes_with(notes, "emissive_strength"), 0, "{notes:?}");
+    assert_eq!(
+        notes_with(notes, "textures are not applied"),
+        0,
+        "{notes:?}"
+    );
+}
+
+#[test]
+fn samplers_map_every_filter_and_wrap_mode() {
+    let filters = [
+        (json!({}), Sampler::default()),
+        (
+            json!({ "magFilter": 9729, "minFilter": 9728, "wrapS": 10497, "wrapT": 33071 }),
+            Sampler {
+                mag: Filter::Linear,
+                min: Filter::Nearest,
+                mip: None,
+                wrap_u: Wrap::Repeat,
+                wrap_v: Wrap::ClampToEdge,
+            },
+        ),
+        (
+            json!({ "minFilter": 9729 }),
+            Sampler {
+                mip: None,
+                ..Sampler::default()
+            },
+        ),
+        (
+            json!({ "minFilter": 9984 }),
+            Sampler {
+                min: Filter::Nearest,
+                mip: Some(Filter::Nearest),
+                ..Sampler::default()
+            },
+        ),
+        (
+            json!({ "minFilter": 9985 }),
+            Sampler {
+                mip: Some(Filter::Nearest),
+                ..Sampler::default()
+            },
+        ),
+        (
+            json!({ "minFilter": 9987, "magFilter": 9728 }),
+            Sampler {
+                mag: Filter::Nearest,
+                ..Sampler::default()
+            },
+        ),
+    ];
+    let materials: Vec<Value> = (0..=filters.len())
+        .map(|i| json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": i } } }))
+        .collect();
+    let mut doc = material_doc(json!(materials));
+    let mut textures: Vec<Value> = (0..filters.len())
+        .map(|i| json!({ "source": 0, "sampler": i }))
+        .collect();
+    // No sampler at all: the defaults.
+    textures.push(json!({ "source": 0 }));
+    doc.root["textures"] = json!(textures);
+    doc.root["samplers"] = json!(filters.iter().map(|(j, _)| j.clone()).collect::<Vec<_>>());
+    doc.root["images"] = json!([{ "uri": png_uri(1, 1) }]);
+    let scene = load_doc(&doc, &LoadOptions::default()).scene;
+    assert_eq!(scene.textures.len(), 1, "one image, one colour space");
+    for (i, (_, want)) in filters.iter().enumerate() {
+        let got = phong_of(&scene, i).textures.diffuse.unwrap().sampler;
+        assert_eq!(got, *want, "sampler {i}");
+    }
+    let last = phong_of(&scene, filters.len()).textures.diffuse.unwrap();
+    assert_eq!(last.sampler, Sampler::default());
+}
+
+#[test]
+fn texture_coordinate_sets_and_colours_of_every_accessor_type() {
+    let mut doc = Doc::new();
+    let pos = doc.vec3(&TRI);
+    let uv_f = doc.floats(&[0.0, 0.5, 1.0, 0.25, 0.125, 1.0], "VEC2", 2);
+    let uv_b = doc.accessor(&[0, 255, 51, 0, 255, 102], 5121, 3, "VEC2", true);
+    let uv_s: Vec<u8> = [0u16, 65535, 13107, 0, 65535, 0]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let uv_s = doc.accessor(&uv_s, 5123, 3, "VEC2", true);
+    let c3 = doc.floats(&[1.0, 0.5, 0.0, 0.0, 1.0, 0.25, 0.0, 0.0, 1.0], "VEC3", 3);
+    let c4b = doc.accessor(
+        &[255, 0, 0, 51, 0, 255, 0, 102, 0, 0, 255, 255],
+        5121,
+        3,
+        "VEC4",
+        true,
+    );
+    let c4s: Vec<u8> = [65535u16, 0, 0, 0, 0, 65535, 0, 65535, 0, 0, 65535, 13107]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let c4s = doc.accessor(&c4s, 5123, 3, "VEC4", true);
+    doc.mesh_node(
+        json!([
+            { "attributes": { "POSITION": pos, "TEXCOORD_0": uv_f, "TEXCOORD_1": uv_b, "COLOR_0": c3 } },
+            { "attributes": { "POSITION": pos, "TEXCOORD_0": uv_s, "COLOR_0": c4b } },
+            { "attributes": { "POSITION": pos, "TEXCOORD_1": uv_f, "COLOR_0": c4s } },
+            { "attributes": { "POSITION": pos } }
+        ]),
+        json!({}),
+    );
+    let (_dir, read) = read_doc(&doc, Container::Glb);
+    let v2 = glam::DVec2::new;
+    let m: Vec<_> = read.meshes.iter().map(|m| &m.mesh).collect();
+    assert_eq!(
+        m[0].uvs[0],
+        vec![v2(0.0, 0.5), v2(1.0, 0.25), v2(0.125, 1.0)]
+    );
+    assert_eq!(m[0].uvs[1], vec![v2(0.0, 1.0), v2(0.2, 0.0), v2(1.0, 0.4)]);
+    assert_eq!(
+        m[1].uvs,
+        vec![vec![v2(0.0, 1.0), v2(0.2, 0.0), v2(1.0, 0.0)]]
+    );
+    // Set 1 without set 0: set 0 reads as zeros.
+    assert_eq!(m[2].uvs.len(), 2);
+    assert_eq!(m[2].uvs[0], vec![glam::DVec2::ZERO; 3]);
+    assert!(m[3].uvs.is_empty() && m[3].colours.is_none());
+    let v4 = glam::Vec4::new;
+    assert_eq!(
+        m[0].colours.as_deref().unwrap(),
+        [
+            v4(1.0, 0.5, 0.0, 1.0),
+            v4(0.0, 1.0, 0.25, 1.0),
+            v4(0.0, 0.0, 1.0, 1.0)
+        ]
+    );
+    assert_eq!(
+        m[1].colours.as_deref().unwrap(),
+        [
+            v4(1.0, 0.0, 0.0, 0.2),
+            v4(0.0, 1.0, 0.0, 0.4),
+            v4(0.0, 0.0, 1.0, 1.0)
+        ]
+    );
+    assert_eq!(
+        m[2].colours.as_deref().unwrap(),
+        [
+            v4(1.0, 0.0, 0.0, 0.0),
+            v4(0.0, 1.0, 0.0, 1.0),
+            v4(0.0, 0.0, 1.0, 0.2)
+        ]
+    );
+
+    // Integers must be normalized; shapes and types are checked.
+    let mut bad = doc;
+    bad.root["accessors"][uv_b]["normalized"] = json!(false);
+    let e = error_of(
+        &bad,
+        Container::Glb,
+        "meshes[0].primitives[0].attributes.TEXCOORD_1",
+    );
+    assert!(e.message.contains("normalized"), "{e}");
+    bad.root["accessors"][uv_b]["normalized"] = json!(true);
+    bad.root["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(c3);
+    error_of(
+        &bad,
+        Container::Glb,
+        "meshes[0].primitives[0].attributes.TEXCOORD_0",
+    );
+    bad.root["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(uv_f);
+    bad.root["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(uv_f);
+    error_of(
+        &bad,
+        Container::Glb,
+        "meshes[0].primitives[0].attributes.COLOR_0",
+    );
+}
+
+#[test]
+fn tangents_follow_the_node_transform_and_mirroring_flips_their_sign() {
+    let mut doc = material_doc(json!([{ "normalTexture": { "index": 0 } }]));
+    let tan = doc.floats(&[1.0, 0.0, 0.0, 1.0].repeat(4), "VEC4", 4);
+    doc.root["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = json!(tan);
+    doc.root["textures"] = json!([{ "source": 0 }]);
+    doc.root["images"] = json!([{ "uri": png_uri(2, 2) }]);
+    doc.root["nodes"][0]["scale"] = json!([-2, 1, 1]);
+    let (_dir, read) = read_doc(&doc, Container::Embedded);
+    let mesh = &read.meshes[0].mesh;
+    for t in mesh.tangents.as_ref().unwrap() {
+        assert_eq!(*t, glam::DVec4::new(-1.0, 0.0, 0.0, -1.0));
+    }
+    // A normal map's image is linear.
+    assert_eq!(read.textures.len(), 1);
+    assert!(!read.textures[0].srgb);
+    // A mesh without normals gets MikkTSpace tangents from flat normals.
+    let mut flat = doc;
+    flat.root["nodes"][0]["scale"] = json!([1, 1, 1]);
+    let attrs = &mut flat.root["meshes"][0]["primitives"][0]["attributes"];
+    attrs.as_object_mut().unwrap().remove("TANGENT");
+    attrs.as_object_mut().unwrap().remove("NORMAL");
+    let (_dir, read) = read_doc(&flat, Container::Embedded);
+    let mesh = &read.meshes[0].mesh;
+    assert!(mesh.normals.is_none());
+    let t = mesh.tangents.as_ref().unwrap();
+    assert_eq!(t.len(), mesh.positions.len());
+    assert!(t
+        .iter()
+        .all(|t| (t.truncate() - DVec3::X).length() < 1e-6 && t.w == 1.0));
+}
+
+#[test]
+fn images_from_files_and_glb_buffer_views() {
+    // An external file with an escaped name, recorded for `watch`.
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("my tex.png"), png(2, 3)).unwrap();
+    let mut doc =
+        material_doc(json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]));
+    doc.root["textures"] = json!([{ "source": 0 }]);
+    doc.root["images"] = json!([{ "uri": "my%20tex.png" }]);
+    let path = doc.write(dir.path(), "model", Container::External);
+    let read = gltf::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let file = dir.path().join("my tex.png");
+    assert_eq!(read.files.last(), Some(&file));
+    assert_eq!(read.textures[0].file.as_ref(), Some(&file));
+    assert_eq!((read.textures[0].width, read.textures[0].height), (2, 3));
+    let loaded = gltf::load(&path, &LoadOptions::default()).unwrap();
+    assert!(loaded.files.contains(&file));
+
+    // A bufferView in a GLB.
+    let bytes = png(4, 1);
+    let view = doc.view(&bytes);
+    doc.root["images"] = json!([{ "bufferView": view, "mimeType": "image/png" }]);
+    let (_dir, read) = read_doc(&doc, Container::Glb);
+    assert_eq!((read.textures[0].width, read.textures[0].height), (4, 1));
+    assert_eq!(read.textures[0].texels[3], [3, 0, 7, 203]);
+    assert_eq!(read.textures[0].file, None);
+}
+
+#[test]
+fn bad_images_and_texture_references_name_the_file_and_field() {
+    let base = || {
+        let mut doc = material_doc(
+            json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]),
+        );
+        doc.root["textures"] = json!([{ "source": 0 }]);
+        doc.root["images"] = json!([{ "uri": png_uri(1, 1) }]);
+        doc
+    };
+    // Sets (or adds) the field at a JSON pointer.
+    let with = |pointer: &str, value: Value| {
+        let mut doc = base();
+        let (parent, key) = pointer.rsplit_once('/').unwrap();
+        let parent = doc.root.pointer_mut(parent).unwrap();
+        match key.parse::<usize>() {
+            Ok(i) => parent[i] = value,
+            Err(_) => parent[key] = value,
+        }
+        doc
+    };
+    let message = |doc: &Doc, field: &str| error_of(doc, Container::Embedded, field).message;
+
+    let m = message(
+        &with("/images/0/uri", json!("missing.png")),
+        "images[0].uri",
+    );
+    assert!(m.contains("missing.png"), "{m}");
+    let mut corrupt = png(8, 8);
+    corrupt.truncate(corrupt.len() / 2);
+    let uri = format!("data:image/png;base64,{}", base64(&corrupt));
+    let m = message(&with("/images/0/uri", json!(uri)), "images[0].uri");
+    assert!(m.contains("corrupt"), "{m}");
+    let gif = format!(
+        "data:image/gif;base64,{}",
+        base64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")
+    );
+    let m = message(&with("/images/0/uri", json!(gif)), "images[0].uri");
+    assert!(m.contains("PNG or JPEG"), "{m}");
+    let m = message(
+        &with("/images/0/uri", json!(png_uri(16385, 1))),
+        "images[0].uri",
+    );
+    assert!(m.contains("larger than"), "{m}");
+    message(
+        &with("/images/0/uri", json!("https://example.com/a.png")),
+        "images[0].uri",
+    );
+    message(
+        &with("/images/0/uri", json!("data:image/png;base64,@@")),
+        "images[0].uri",
+    );
+    message(&with("/images/0", json!({})), "images[0]");
+    let mut doc = base();
+    let view = doc.view(&png(1, 1));
+    doc.root["images"] = json!([{ "bufferView": view }]);
+    message(&doc, "images[0].mimeType");
+
+    // Indices outside the file.
+    message(
+        &with(
+            "/materials/0/pbrMetallicRoughness/baseColorTexture/index",
+            json!(3),
+        ),
+        "materials[0].pbrMetallicRoughness.baseColorTexture.index",
+    );
+    message(&with("/textures/0/source", json!(2)), "textures[0].source");
+    message(
+        &with("/textures/0", json!({ "source": 0, "sampler": 1 })),
+        "textures[0].sampler",
+    );
+    message(
+        &with(
+            "/materials/0/pbrMetallicRoughness/baseColorTexture/texCoord",
+            json!(2),
+        ),
+        "materials[0].pbrMetallicRoughness.baseColorTexture.texCoord",
+    );
+    let doc = with(
+        "/materials/0/pbrMetallicRoughness/baseColorTexture",
+        json!({ "index": 0, "extensions": { "KHR_texture_transform": { "texCoord": 5 } } }),
+    );
+    message(
+        &doc,
+        "materials[0].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform.texCoord",
+    );
+    let doc = with(
+        "/materials/0",
+        json!({ "alphaMode": "MASK", "alphaCutoff": -1 }),
+    );
+    message(&doc, "materials[0].alphaCutoff");
+
+    // The texels are charged to the memory budget before they are decoded.
+    let doc = with("/images/0/uri", json!(png_uri(1024, 1024)));
+    let dir = TempDir::new().unwrap();
+    let path = doc.write(dir.path(), "model", Container::Embedded);
+    let opts = LoadOptions {
+        max_scene_bytes: 2 << 20,
+        ..Default::default()
+    };
+    let err = gltf::read_with(&path, &Guard::new(&path, &opts)).unwrap_err();
+    assert_eq!(err.field, "images[0].uri", "{err}");
+    assert!(err.message.contains("memory budget"), "{err}");
 }

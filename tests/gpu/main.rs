@@ -19,6 +19,7 @@ mod bands;
 mod bunny;
 mod camera;
 mod checker;
+mod default_light;
 mod hard_cases;
 mod large_scenes;
 mod lights;

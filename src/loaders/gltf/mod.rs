@@ -1,6 +1,8 @@
 //! glTF 2.0 files (`.gltf` with external or embedded buffers, `.glb`): the
 //! triangle meshes, the first camera and the KHR_lights_punctual lights of the
-//! default scene, with every node transform applied.
+//! default scene, with every node transform applied, and their materials as
+//! Phong shaders with textures, normal maps, emission and alpha
+//! ([`material`]); tangents come from TANGENT or MikkTSpace ([`tangents`]).
 //!
 //! The `gltf` crate parses and validates the JSON; its validation reports field
 //! paths, which become [`SceneError::field`]. Buffers and accessors are read
@@ -10,10 +12,14 @@
 //! and can panic on inconsistent files. Every range is checked before a byte is
 //! read, so no file content can make this module panic.
 
+mod material;
+mod tangents;
+
+use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
 
-use glam::{DMat3, DMat4, DQuat, DVec3, DVec4, Vec3};
+use glam::{DMat3, DMat4, DQuat, DVec2, DVec3, DVec4, Vec3, Vec4};
 use gltf::accessor::{sparse::IndexType, Accessor, DataType, Dimensions};
 use gltf::buffer::{Source, View};
 use gltf::json::validation::Checked;
@@ -24,19 +30,27 @@ use gltf::scene::Transform;
 use super::guard::Guard;
 use super::{LoadOptions, Loaded};
 use crate::scene::{
-    Camera, Light, LightKind, Mesh, Object, Phong, Projection, Scene, Shader, Shape,
+    Camera, Light, LightKind, Mesh, Object, Phong, Projection, Scene, Shader, Shape, SurfaceMaps,
+    Texture, TextureId,
 };
 use crate::SceneError;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
-/// One triangle mesh from the file: world-space geometry and its material's base colour.
+/// One triangle mesh from the file: world-space geometry and its material.
 #[derive(Clone, Debug)]
 pub struct GltfMesh {
-    /// Triangle list with positions and normals in world space (node transforms applied).
+    /// Triangle list with positions, normals and tangents in world space
+    /// (node transforms applied), its TEXCOORD_0/1 and COLOR_0.
     pub mesh: Mesh,
     /// Linear RGB of the material's `baseColorFactor`; `None` when the primitive has no material.
     pub base_color: Option<Vec3>,
+    /// The Phong shader of its material (module [`material`]); its
+    /// textures index [`GltfDocument::textures`].
+    pub phong: Phong,
+    /// The material's normal map, emission and alpha; textures index
+    /// [`GltfDocument::textures`].
+    pub maps: SurfaceMaps,
     /// Where it came from, for messages, e.g. `node 'Bunny' mesh 0 primitive 0`.
     pub name: String,
 }
@@ -65,8 +79,11 @@ pub struct GltfDocument {
     pub lights: Vec<Light>,
     /// Notes for the user about parts of the file that are not used; one line each.
     pub notes: Vec<String>,
-    /// The `.gltf`/`.glb` itself, then every external buffer file read.
+    /// The `.gltf`/`.glb` itself, then every external buffer and image file read.
     pub files: Vec<PathBuf>,
+    /// The decoded images that the meshes' materials use, one per (image,
+    /// colour space).
+    pub textures: Vec<Texture>,
 }
 
 /// Reads the file's default scene (its `scene`, else scene 0), with the
@@ -91,35 +108,25 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         return Err(SceneError::new(path, field, message));
     }
 
-    // One Phong shader per distinct colour, in order of first use.
-    let mut colours: Vec<Vec3> = Vec::new();
+    // One Phong shader per distinct shader (colour and textures), in order
+    // of first use; the maps stay per object.
+    let mut phongs: Vec<Phong> = Vec::new();
     let mut objects = Vec::with_capacity(doc.meshes.len());
     for m in doc.meshes {
-        let colour = m.base_color.unwrap_or(Vec3::ONE);
-        let shader = colours
+        let shader = phongs
             .iter()
-            .position(|&c| c == colour)
+            .position(|p| *p == m.phong)
             .unwrap_or_else(|| {
-                colours.push(colour);
-                colours.len() - 1
+                phongs.push(m.phong);
+                phongs.len() - 1
             });
         objects.push(Object {
-            maps: Default::default(),
+            maps: m.maps,
             shape: Shape::Mesh(m.mesh),
             shader,
         });
     }
-    let phong = |diffuse| Phong {
-        textures: Default::default(),
-        ambient: Vec3::ZERO,
-        diffuse,
-        specular: Vec3::ZERO,
-        shininess: 1.0,
-    };
-    let shaders = colours
-        .into_iter()
-        .map(|c| Shader::Phong(phong(c)))
-        .collect();
+    let shaders = phongs.into_iter().map(Shader::Phong).collect();
 
     let (width, height) = image_size(opts, doc.camera.and_then(|c| c.aspect_ratio));
     let camera = match doc.camera {
@@ -141,13 +148,14 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let mut lights = doc.lights;
     if lights.is_empty() {
         notes.push(format!(
-            "no lights in {}: using a default directional light",
+            "no lights in {}: using default lights placed relative to the camera \
+             (a key light over its shoulder and a weaker fill light from it)",
             path.display()
         ));
-        lights.push(default_light(&camera));
+        lights.extend(default_lights(&camera));
     }
     let scene = Scene {
-        textures: vec![],
+        textures: doc.textures,
         camera,
         background: Vec3::ZERO,
         shaders,
@@ -211,18 +219,34 @@ fn framing_camera(path: &Path, objects: &[Object], width: u32, height: u32) -> R
     })
 }
 
-/// A white directional light from over the viewer's shoulder: along the view,
-/// downwards and towards the left of the image.
-fn default_light(camera: &Camera) -> Light {
+/// The key and fill lights of [`default_lights`], in camera space (x right,
+/// y up, z back; the camera looks along −z): the directions they travel in
+/// and their intensities.
+///
+/// The key comes from above, behind and to the right of the camera (over
+/// its shoulder), about 33° above and 20° to the side of the view; the fill
+/// from just left of and below the camera, 13° off the view, so that it
+/// reaches what the key leaves in shadow: of the surfaces the camera sees,
+/// only those within 13° of grazing can face away from both.
+pub const DEFAULT_LIGHTS: [(DVec3, f32); 2] = [
+    (DVec3::new(-0.36, -0.7, -1.0), 0.8),
+    (DVec3::new(0.2, 0.1, -1.0), 0.35),
+];
+
+/// White directional lights fixed to the camera ([`DEFAULT_LIGHTS`]), as
+/// model viewers light what they show: wherever the file's camera or the
+/// framing camera looks from, what it sees is lit.
+fn default_lights(camera: &Camera) -> [Light; 2] {
     let o = camera.orientation;
-    let direction = (-o.z_axis - o.y_axis - 0.5 * o.x_axis).normalize();
-    Light {
-        kind: LightKind::Directional { direction },
-        intensity: 1.0,
+    DEFAULT_LIGHTS.map(|(d, intensity)| Light {
+        kind: LightKind::Directional {
+            direction: (o * d).normalize(),
+        },
+        intensity,
         ambient: Vec3::ZERO,
         diffuse: Vec3::ONE,
         specular: Vec3::ONE,
-    }
+    })
 }
 
 /// [`read`], also returning the index of the scene used (`None`: the file has no scene).
@@ -240,10 +264,15 @@ fn read_scene(path: &Path, guard: &Guard) -> Result<(GltfDocument, Option<usize>
     let mut r = Reader {
         file: path,
         guard,
+        document: &document,
+        json,
+        raw: None,
         buffers: Vec::new(),
         doc,
         flags: Flags::default(),
         at: String::new(),
+        materials: Vec::new(),
+        texture_ids: HashMap::new(),
     };
     // The `gltf` crate's accessors unwrap what its validation should have
     // checked; should one still panic, it becomes an error naming the file
@@ -308,9 +337,23 @@ fn walk(
         let note = "skins, morph targets and animations are not applied: static pose";
         notes.push(format!("{file}: {note}"));
     }
-    if f.textured {
+    if f.metallic_roughness {
+        let note = "metallic-roughness (metallicFactor, roughnessFactor, \
+                    metallicRoughnessTexture) is not applied: materials are diffuse Phong";
+        notes.push(format!("{file}: {note}"));
+    }
+    if f.occlusion {
+        notes.push(format!("{file}: occlusionTexture is not applied"));
+    }
+    let mut ignored: Vec<&str> = Vec::new();
+    for e in document.extensions_used() {
+        if !material::SUPPORTED_EXTENSIONS.contains(&e) && !ignored.contains(&e) {
+            ignored.push(e);
+        }
+    }
+    for e in ignored {
         notes.push(format!(
-            "{file}: textures are not applied; baseColorFactor only"
+            "{file}: extension {e} is not supported and is ignored"
         ));
     }
     if f.ranged {
@@ -353,6 +396,7 @@ fn empty_document(path: &Path) -> GltfDocument {
         lights: vec![],
         notes: vec![],
         files: vec![path.to_path_buf()],
+        textures: vec![],
     }
 }
 
@@ -474,7 +518,8 @@ fn gltf_path(path: &str) -> String {
 struct Flags {
     skipped: usize,
     animated: bool,
-    textured: bool,
+    metallic_roughness: bool,
+    occlusion: bool,
     ranged: bool,
 }
 
@@ -482,6 +527,15 @@ struct Flags {
 struct Reader<'a> {
     file: &'a Path,
     guard: &'a Guard,
+    document: &'a gltf::Document,
+    /// The JSON text, for what the `gltf` crate does not expose.
+    json: &'a [u8],
+    /// `json` parsed, once it is needed.
+    raw: Option<serde_json::Value>,
+    /// `materials[i]` once read.
+    materials: Vec<Option<material::Material>>,
+    /// The texture decoded from each (image, sRGB) pair.
+    texture_ids: HashMap<(usize, bool), TextureId>,
     /// The field being read, for an error should a dependency panic.
     at: String,
     /// One per `buffers[i]`, exactly `byteLength` long.
@@ -637,20 +691,145 @@ impl Reader<'_> {
         if DMat3::from_mat4(*world).determinant() < 0.0 {
             triangles.iter_mut().for_each(|t| t.swap(1, 2));
         }
-        let base_color = self.base_color(&prim.material())?;
-        let mesh = Mesh {
-            uvs: vec![],
-            colours: None,
-            tangents: None,
+        let material = self.material(&prim.material())?;
+        let n = positions.len();
+        let uvs = self.uv_sets(prim, n, field)?;
+        let colours = match prim.get(&Semantic::Colors(0)) {
+            Some(acc) => Some(self.colours(&acc, n, field)?),
+            None => None,
+        };
+        // Tangents only serve normal maps.
+        let normal_set = material.maps.normal.map(|(t, _)| t.tex_coord as usize);
+        let tangents = match (normal_set, prim.get(&Semantic::Tangents)) {
+            (Some(_), Some(acc)) => {
+                let field = format!("{field}.attributes.TANGENT");
+                let raw = self.read_accessor(&acc, &field, Dimensions::Vec4, &[DataType::F32])?;
+                self.check_attribute(&acc, &raw, 4, n, &field)?;
+                let m = DMat3::from_mat4(*world);
+                Some(tangents::from_attribute(&raw, m, normals.as_deref()))
+            }
+            _ => None,
+        };
+        let mut mesh = Mesh {
+            uvs,
+            colours,
+            tangents,
             positions,
             normals,
             indices: triangles,
         };
+        if let (Some(set), None) = (normal_set, &mesh.tangents) {
+            tangents::generate(&mut mesh, set);
+        }
         Ok(Some(GltfMesh {
             mesh,
-            base_color,
+            base_color: material.base_color,
+            phong: material.phong,
+            maps: material.maps,
             name,
         }))
+    }
+
+    /// TEXCOORD_0 and TEXCOORD_1 (float, or normalised unsigned byte or
+    /// short); a missing set 0 below a present set 1 reads as zeros.
+    fn uv_sets(
+        &self,
+        prim: &gltf::Primitive,
+        count: usize,
+        field: &str,
+    ) -> Result<Vec<Vec<DVec2>>> {
+        let mut sets = Vec::new();
+        for k in 0..2 {
+            let Some(acc) = prim.get(&Semantic::TexCoords(k)) else {
+                sets.push(None);
+                continue;
+            };
+            let field = format!("{field}.attributes.TEXCOORD_{k}");
+            let raw = self.unit_attribute(&acc, &field, Dimensions::Vec2, count)?;
+            sets.push(Some(raw.chunks_exact(2).map(DVec2::from_slice).collect()));
+        }
+        while sets.last().is_some_and(Option::is_none) {
+            sets.pop();
+        }
+        Ok(sets
+            .into_iter()
+            .map(|s| s.unwrap_or_else(|| vec![DVec2::ZERO; count]))
+            .collect())
+    }
+
+    /// COLOR_0 as linear RGBA: VEC3 (alpha 1) or VEC4, float or normalised
+    /// unsigned byte or short.
+    fn colours(&self, acc: &Accessor, count: usize, field: &str) -> Result<Vec<Vec4>> {
+        let field = format!("{field}.attributes.COLOR_0");
+        let dims = match acc.dimensions() {
+            d @ (Dimensions::Vec3 | Dimensions::Vec4) => d,
+            // Reported by `read_accessor` as the wrong shape.
+            _ => Dimensions::Vec4,
+        };
+        let raw = self.unit_attribute(acc, &field, dims, count)?;
+        let n = dims.multiplicity();
+        Ok(raw
+            .chunks_exact(n)
+            .map(|c| {
+                let c = c.iter().map(|&x| x as f32).collect::<Vec<_>>();
+                Vec4::new(c[0], c[1], c[2], c.get(3).copied().unwrap_or(1.0))
+            })
+            .collect())
+    }
+
+    /// A vertex attribute of type float or normalised unsigned byte or
+    /// short, as numbers (integers divided by their maximum), one element per vertex.
+    fn unit_attribute(
+        &self,
+        acc: &Accessor,
+        field: &str,
+        dims: Dimensions,
+        count: usize,
+    ) -> Result<Vec<f64>> {
+        let types = [DataType::F32, DataType::U8, DataType::U16];
+        let mut raw = self.read_accessor(acc, field, dims, &types)?;
+        let max = match acc.data_type() {
+            DataType::U8 => 255.0,
+            DataType::U16 => 65535.0,
+            _ => 1.0,
+        };
+        if max != 1.0 {
+            if !acc.normalized() {
+                let message = format!(
+                    "accessors[{}] is {:?} but not normalized (glTF requires normalized integers here)",
+                    acc.index(),
+                    acc.data_type()
+                );
+                return self.fail(field, message);
+            }
+            raw.iter_mut().for_each(|x| *x /= max);
+        }
+        self.check_attribute(acc, &raw, dims.multiplicity(), count, field)?;
+        Ok(raw)
+    }
+
+    /// `raw` has one finite element of `n` numbers per vertex.
+    fn check_attribute(
+        &self,
+        acc: &Accessor,
+        raw: &[f64],
+        n: usize,
+        count: usize,
+        field: &str,
+    ) -> Result<()> {
+        if raw.len() != count * n {
+            let message = format!("has {} elements for {count} vertices", raw.len() / n);
+            return self.fail(field, message);
+        }
+        if let Some(i) = raw.iter().position(|x| !x.is_finite()) {
+            let message = format!(
+                "element {} of accessors[{}] is not finite",
+                i / n,
+                acc.index()
+            );
+            return self.fail(field, message);
+        }
+        Ok(())
     }
 
     /// Admits a triangle primitive to the scene's memory budget and triangle
@@ -673,7 +852,33 @@ impl Reader<'_> {
         };
         self.guard
             .charge(vertices, normals, indices, triangles)
-            .map_err(|e| self.err(field, e.0))
+            .map_err(|e| self.err(field, e.0))?;
+        // Texture coordinates, colours and tangents: each read as f64s and
+        // then kept (16, 16 and 32 bytes a vertex); generated tangents may
+        // split every corner into a vertex of its own.
+        let n = |s: Semantic, elem: u64| {
+            prim.get(&s)
+                .map_or(0, |a| (a.count() as u64).saturating_mul(elem))
+        };
+        let normal_map = prim.material().normal_texture().is_some();
+        let mut bytes = n(Semantic::TexCoords(0), 32)
+            .saturating_add(n(Semantic::TexCoords(1), 32))
+            .saturating_add(n(Semantic::Colors(0), 48));
+        if normal_map {
+            bytes = bytes.saturating_add(match prim.get(&Semantic::Tangents) {
+                Some(_) => n(Semantic::Tangents, 64),
+                // Per corner: MikkTSpace's tangent, and a possible copy of
+                // the vertex (position, normal, two uv sets, colour, tangent).
+                None => triangles.saturating_mul(3 * (16 + 128)),
+            });
+        }
+        if bytes == 0 {
+            return Ok(());
+        }
+        self.guard.charge_bytes(bytes).map_err(|e| {
+            let what = "with this primitive's texture coordinates, colours and tangents";
+            self.err(field, e.0.replace("with this image", what))
+        })
     }
 
     /// World-space positions, all finite.
@@ -719,22 +924,6 @@ impl Reader<'_> {
         }
         // Exact: each is an integer below `count`.
         Ok(ix.into_iter().map(|v| v as u32).collect())
-    }
-
-    /// The linear RGB of `baseColorFactor`; `None` for the default material.
-    fn base_color(&mut self, material: &gltf::Material) -> Result<Option<Vec3>> {
-        let Some(m) = material.index() else {
-            return Ok(None);
-        };
-        let pbr = material.pbr_metallic_roughness();
-        self.flags.textured |= pbr.base_color_texture().is_some();
-        let [r, g, b, _alpha] = pbr.base_color_factor();
-        let c = Vec3::new(r, g, b);
-        if !c.is_finite() || c.min_element() < 0.0 {
-            let field = format!("materials[{m}].pbrMetallicRoughness.baseColorFactor");
-            return self.fail(field, format!("must be finite and non-negative, got {c}"));
-        }
-        Ok(Some(c))
     }
 
     /// World-space unit normals, transformed by the inverse transpose so that
@@ -840,16 +1029,7 @@ impl Reader<'_> {
         (n, ty): (usize, DataType),
         field: &str,
     ) -> Result<Vec<f64>> {
-        let buffer = &self.buffers[view.buffer().index()];
-        let end = view.offset().checked_add(view.length());
-        let Some(bytes) = end.and_then(|end| buffer.get(view.offset()..end)) else {
-            let message = format!(
-                "exceeds buffer {} ({} bytes)",
-                view.buffer().index(),
-                buffer.len()
-            );
-            return self.fail(format!("bufferViews[{}]", view.index()), message);
-        };
+        let bytes = self.view_bytes(view)?;
         let (size, elem) = (ty.size(), ty.size() * n);
         let stride = view.stride().unwrap_or(elem);
         if stride < elem {
@@ -882,6 +1062,21 @@ impl Reader<'_> {
             }
         }
         Ok(out)
+    }
+
+    /// The bytes of a buffer view (an image's), checked to lie in its buffer.
+    fn view_bytes(&self, view: &View) -> Result<&[u8]> {
+        let buffer = &self.buffers[view.buffer().index()];
+        let end = view.offset().checked_add(view.length());
+        end.and_then(|end| buffer.get(view.offset()..end))
+            .ok_or_else(|| {
+                let message = format!(
+                    "exceeds buffer {} ({} bytes)",
+                    view.buffer().index(),
+                    buffer.len()
+                );
+                self.err(format!("bufferViews[{}]", view.index()), message)
+            })
     }
 
     fn camera(&self, camera: &gltf::Camera, world: &DMat4, node: usize) -> Result<GltfCamera> {

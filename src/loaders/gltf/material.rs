@@ -1,0 +1,373 @@
+//! glTF materials as penumbra's Phong shader and [`SurfaceMaps`], and the
+//! textures, images and samplers they use.
+//!
+//! A material becomes `Phong { ambient: 0, diffuse: baseColorFactor.rgb,
+//! specular: 0, shininess: 1 }` with `baseColorTexture` as its diffuse
+//! texture; its normal map, emission and alpha become the primitive's
+//! [`SurfaceMaps`]. Metallic-roughness and occlusion have no meaning in
+//! the Phong model: they are named in a note, not applied (a material with
+//! `metallicFactor` 0, `roughnessFactor` 1 and no metallic-roughness
+//! texture is the diffuse surface Phong draws, and gets no note; glTF's
+//! defaults, 1 and 1, are a rough metal and do).
+//!
+//! Images are decoded once per (image, colour space): a colour use (base
+//! colour, emission) is sRGB, a normal map linear, so an image used both
+//! ways becomes two textures.
+
+use std::path::Path;
+
+use glam::{DVec2, Vec3};
+use gltf::texture::{MagFilter, MinFilter, WrappingMode};
+
+use super::{Reader, Result};
+use crate::loaders::texture;
+use crate::scene::{
+    AlphaMode, Filter, Phong, Sampler, SurfaceMaps, TextureId, TextureRef, UvTransform, Wrap,
+};
+
+/// What one glTF material gives a primitive: its shader and its maps. The
+/// [`TextureRef`]s index [`super::GltfDocument::textures`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Material {
+    /// Linear RGB of `baseColorFactor`; `None` for the default material.
+    pub base_color: Option<Vec3>,
+    /// The Phong shader the material maps to.
+    pub phong: Phong,
+    /// Normal map, emission and alpha.
+    pub maps: SurfaceMaps,
+}
+
+/// glTF's default material: white, opaque, no maps.
+const DEFAULT: Material = Material {
+    base_color: None,
+    phong: Phong {
+        ambient: Vec3::ZERO,
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+        textures: crate::scene::PhongTextures {
+            ambient: None,
+            diffuse: None,
+            specular: None,
+        },
+    },
+    maps: SurfaceMaps::NONE,
+};
+
+/// The extensions whose meaning penumbra applies; every other one in
+/// `extensionsUsed` is named in a note.
+pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+];
+
+impl Reader<'_> {
+    /// The material of a primitive, read once per material index.
+    pub(super) fn material(&mut self, material: &gltf::Material) -> Result<Material> {
+        let Some(m) = material.index() else {
+            return Ok(DEFAULT);
+        };
+        if let Some(Some(done)) = self.materials.get(m) {
+            return Ok(*done);
+        }
+        let f = |k: &str| format!("materials[{m}].{k}");
+        let pbr = material.pbr_metallic_roughness();
+        let [r, g, b, alpha] = pbr.base_color_factor();
+        let c = Vec3::new(r, g, b);
+        if !c.is_finite() || c.min_element() < 0.0 {
+            let field = f("pbrMetallicRoughness.baseColorFactor");
+            return self.fail(field, format!("must be finite and non-negative, got {c}"));
+        }
+        if !(0.0..=1.0).contains(&alpha) {
+            let field = f("pbrMetallicRoughness.baseColorFactor");
+            return self.fail(field, format!("alpha must be in [0, 1], got {alpha}"));
+        }
+        // Metallic 0 and roughness 1 without a texture is the diffuse
+        // surface that Phong draws; anything else looks different.
+        self.flags.metallic_roughness |= pbr.metallic_factor() != 0.0
+            || pbr.roughness_factor() != 1.0
+            || pbr.metallic_roughness_texture().is_some();
+        self.flags.occlusion |= material.occlusion_texture().is_some();
+
+        let base_texture = match pbr.base_color_texture() {
+            Some(info) => {
+                Some(self.info(&info, &f("pbrMetallicRoughness.baseColorTexture"), true)?)
+            }
+            None => None,
+        };
+        let normal = match material.normal_texture() {
+            Some(n) => {
+                let field = f("normalTexture");
+                let scale = n.scale();
+                if !scale.is_finite() {
+                    return self.fail(format!("{field}.scale"), "must be finite");
+                }
+                let transform = self.raw_transform(m, &field)?;
+                let texture = self.texture(&n.texture(), false, &field)?;
+                let at = format!("{field}.texCoord");
+                let r = self.texture_ref(texture, n.tex_coord(), transform, &at)?;
+                Some((r, scale))
+            }
+            None => None,
+        };
+        let strength = material.emissive_strength().unwrap_or(1.0);
+        if !(strength >= 0.0 && strength.is_finite()) {
+            let field = f("extensions.KHR_materials_emissive_strength.emissiveStrength");
+            return self.fail(field, format!("must be finite and >= 0, got {strength}"));
+        }
+        let factor = Vec3::from_array(material.emissive_factor());
+        if !factor.is_finite() || factor.min_element() < 0.0 {
+            let message = format!("must be finite and non-negative, got {factor}");
+            return self.fail(f("emissiveFactor"), message);
+        }
+        let emission_texture = match material.emissive_texture() {
+            Some(info) => Some(self.info(&info, &f("emissiveTexture"), true)?),
+            None => None,
+        };
+        let alpha_mode = match material.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => {
+                let cutoff = material.alpha_cutoff().unwrap_or(0.5);
+                if !(cutoff >= 0.0 && cutoff.is_finite()) {
+                    let message = format!("must be finite and >= 0, got {cutoff}");
+                    return self.fail(f("alphaCutoff"), message);
+                }
+                AlphaMode::Mask { cutoff }
+            }
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        };
+        let maps = SurfaceMaps {
+            normal,
+            emission: factor * strength,
+            emission_texture,
+            alpha_mode,
+            opacity: alpha,
+            // Alpha comes from the base colour texture, the same use.
+            opacity_texture: base_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
+        };
+        let phong = Phong {
+            textures: crate::scene::PhongTextures {
+                diffuse: base_texture,
+                ..Default::default()
+            },
+            diffuse: c,
+            ..DEFAULT.phong
+        };
+        let done = Material {
+            base_color: Some(c),
+            phong,
+            maps,
+        };
+        if self.materials.len() <= m {
+            self.materials.resize(m + 1, None);
+        }
+        self.materials[m] = Some(done);
+        Ok(done)
+    }
+
+    /// A `textureInfo` at `field` (`materials[0].emissiveTexture`) as a
+    /// texture use; `srgb` for colour textures.
+    fn info(&mut self, info: &gltf::texture::Info, field: &str, srgb: bool) -> Result<TextureRef> {
+        let mut tex_coord = info.tex_coord();
+        let mut at = format!("{field}.texCoord");
+        let transform = match info.texture_transform() {
+            Some(t) => {
+                if let Some(k) = t.tex_coord() {
+                    tex_coord = k;
+                    at = format!("{field}.extensions.KHR_texture_transform.texCoord");
+                }
+                let [ox, oy] = t.offset();
+                let [sx, sy] = t.scale();
+                let field = format!("{field}.extensions.KHR_texture_transform");
+                transform(&[ox, oy, t.rotation(), sx, sy])
+                    .ok_or_else(|| self.err(field, "offset, rotation and scale must be finite"))?
+            }
+            None => UvTransform::default(),
+        };
+        let texture = self.texture(&info.texture(), srgb, field)?;
+        self.texture_ref(texture, tex_coord, transform, &at)
+    }
+
+    /// A texture use from its parts; `at` is the field of its `texCoord`,
+    /// which must be 0 or 1.
+    fn texture_ref(
+        &self,
+        (texture, sampler): (TextureId, Sampler),
+        tex_coord: u32,
+        transform: UvTransform,
+        at: &str,
+    ) -> Result<TextureRef> {
+        if tex_coord >= 2 {
+            let message = format!("is {tex_coord}; penumbra reads TEXCOORD_0 and TEXCOORD_1 only");
+            return self.fail(at, message);
+        }
+        Ok(TextureRef {
+            texture,
+            sampler,
+            tex_coord,
+            transform,
+        })
+    }
+
+    /// KHR_texture_transform of `materials[m].normalTexture`, which the
+    /// `gltf` crate does not expose: read from the JSON itself. Its
+    /// `texCoord` is refused here, as it would silently differ otherwise.
+    fn raw_transform(&mut self, m: usize, field: &str) -> Result<UvTransform> {
+        if self.raw.is_none() {
+            let value = serde_json::from_slice(self.json).unwrap_or(serde_json::Value::Null);
+            self.raw = Some(value);
+        }
+        let raw = self.raw.as_ref().expect("parsed above");
+        let ext = &raw["materials"][m]["normalTexture"]["extensions"]["KHR_texture_transform"];
+        if ext.is_null() {
+            return Ok(UvTransform::default());
+        }
+        let at = format!("{field}.extensions.KHR_texture_transform");
+        let num = |v: &serde_json::Value, default: f64| match v {
+            serde_json::Value::Null => Some(default),
+            v => v.as_f64(),
+        };
+        let pair = |k: &str, d: f64| {
+            let v = &ext[k];
+            Some([num(&v[0], d)?, num(&v[1], d)?]).filter(|_| v.is_null() || v.is_array())
+        };
+        let parts = (|| {
+            let [ox, oy] = pair("offset", 0.0)?;
+            let [sx, sy] = pair("scale", 1.0)?;
+            Some([ox, oy, num(&ext["rotation"], 0.0)?, sx, sy])
+        })();
+        if !ext["texCoord"].is_null() {
+            let message = "is not supported on normalTexture; set the normalTexture's texCoord";
+            return self.fail(format!("{at}.texCoord"), message);
+        }
+        let t = parts.and_then(|p| transform(&p.map(|x| x as f32)));
+        t.ok_or_else(|| self.err(at, "offset, rotation and scale must be finite numbers"))
+    }
+
+    /// The texture `t` as a texture id (decoding its image in colour space
+    /// `srgb` once) and its sampler; `field` is where it is used.
+    fn texture(
+        &mut self,
+        t: &gltf::Texture,
+        srgb: bool,
+        field: &str,
+    ) -> Result<(TextureId, Sampler)> {
+        let sampler = sampler(&t.sampler());
+        let image = t.source().index();
+        if let Some(&id) = self.texture_ids.get(&(image, srgb)) {
+            return Ok((id, sampler));
+        }
+        self.at = format!("{field}.index");
+        let id = self.image(image, srgb)?;
+        self.texture_ids.insert((image, srgb), id);
+        Ok((id, sampler))
+    }
+
+    /// Decodes `images[i]` (a data: URI, a bufferView or a file next to
+    /// the glTF file) into a new texture.
+    fn image(&mut self, i: usize, srgb: bool) -> Result<TextureId> {
+        let field = format!("images[{i}]");
+        let Some(json) = self.document.as_json().images.get(i) else {
+            return self.fail(field, "does not exist");
+        };
+        let declared = json.mime_type.as_ref().map(|m| m.0.as_str());
+        let mut file = None;
+        let (bytes, mime, at): (std::borrow::Cow<[u8]>, Option<&str>, String) =
+            match (&json.buffer_view, &json.uri) {
+                (Some(view), _) => {
+                    let at = format!("{field}.bufferView");
+                    let Some(mime) = declared else {
+                        let message = "is required for an image in a bufferView";
+                        return self.fail(format!("{field}.mimeType"), message);
+                    };
+                    let Some(view) = self.document.views().nth(view.value()) else {
+                        return self.fail(at, "does not exist");
+                    };
+                    let bytes = self.view_bytes(&view)?;
+                    (bytes.to_vec().into(), Some(mime), at)
+                }
+                (None, Some(uri)) if uri.starts_with("data:") => {
+                    let at = format!("{field}.uri");
+                    let Some((head, payload)) = uri.split_once(";base64,") else {
+                        return self.fail(at, "is not a base64 data: URI");
+                    };
+                    let Some(bytes) = super::decode_base64(payload) else {
+                        return self.fail(at, "is not a base64 data: URI");
+                    };
+                    let in_uri = head
+                        .strip_prefix("data:")
+                        .filter(|m| m.starts_with("image/"));
+                    (bytes.into(), declared.or(in_uri), at)
+                }
+                (None, Some(uri)) => {
+                    let at = format!("{field}.uri");
+                    let Some(relative) = super::percent_decode(uri).filter(|_| !uri.contains(':'))
+                    else {
+                        let message = "is neither a relative path nor a base64 data: URI";
+                        return self.fail(at, message);
+                    };
+                    let base = self.file.parent().unwrap_or(Path::new(""));
+                    let path = base.join(relative);
+                    let bytes = self
+                        .guard
+                        .read(&path, "image")
+                        .map_err(|e| self.err(&at, e.0))?;
+                    if !self.doc.files.contains(&path) {
+                        self.doc.files.push(path.clone());
+                    }
+                    file = Some(path);
+                    (bytes.into(), declared, at)
+                }
+                (None, None) => return self.fail(field, "has neither a uri nor a bufferView"),
+            };
+        let name = self.file.file_name().unwrap_or(self.file.as_os_str());
+        let label = format!("{} {field}", name.to_string_lossy());
+        let mut texture = texture::decode(&bytes, mime, &label, srgb, self.guard)
+            .map_err(|e| self.err(at, e.0))?;
+        texture.file = file;
+        self.doc.textures.push(texture);
+        Ok(self.doc.textures.len() - 1)
+    }
+}
+
+/// A transform from `[offset.x, offset.y, rotation, scale.x, scale.y]`;
+/// `None` unless all are finite.
+fn transform(p: &[f32; 5]) -> Option<UvTransform> {
+    p.iter().all(|x| x.is_finite()).then(|| UvTransform {
+        offset: DVec2::new(f64::from(p[0]), f64::from(p[1])),
+        rotation: f64::from(p[2]),
+        scale: DVec2::new(f64::from(p[3]), f64::from(p[4])),
+    })
+}
+
+/// A glTF sampler; undefined filters take [`Sampler::default`]'s.
+pub(super) fn sampler(s: &gltf::texture::Sampler) -> Sampler {
+    let d = Sampler::default();
+    let mag = match s.mag_filter() {
+        Some(MagFilter::Nearest) => Filter::Nearest,
+        Some(MagFilter::Linear) => Filter::Linear,
+        None => d.mag,
+    };
+    let (min, mip) = match s.min_filter() {
+        Some(MinFilter::Nearest) => (Filter::Nearest, None),
+        Some(MinFilter::Linear) => (Filter::Linear, None),
+        Some(MinFilter::NearestMipmapNearest) => (Filter::Nearest, Some(Filter::Nearest)),
+        Some(MinFilter::LinearMipmapNearest) => (Filter::Linear, Some(Filter::Nearest)),
+        Some(MinFilter::NearestMipmapLinear) => (Filter::Nearest, Some(Filter::Linear)),
+        Some(MinFilter::LinearMipmapLinear) => (Filter::Linear, Some(Filter::Linear)),
+        None => (d.min, d.mip),
+    };
+    let wrap = |w| match w {
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrappingMode::Repeat => Wrap::Repeat,
+    };
+    Sampler {
+        mag,
+        min,
+        mip,
+        wrap_u: wrap(s.wrap_s()),
+        wrap_v: wrap(s.wrap_t()),
+    }
+}
