@@ -1651,6 +1651,14 @@ fn tangents_follow_the_node_transform_and_mirroring_flips_their_sign() {
     assert!(t
         .iter()
         .all(|t| (t.truncate() - DVec3::X).length() < 1e-6 && t.w == 1.0));
+    // Without the normal map's uv set there is no tangent direction: zero
+    // tangents, which leave the normal as it is.
+    let mut no_uv = flat;
+    let attrs = &mut no_uv.root["meshes"][0]["primitives"][0]["attributes"];
+    attrs.as_object_mut().unwrap().remove("TEXCOORD_0");
+    let (_dir, read) = read_doc(&no_uv, Container::Embedded);
+    let t = read.meshes[0].mesh.tangents.as_ref().unwrap();
+    assert_eq!(t, &vec![glam::DVec4::W; 4]);
 }
 
 #[test]

@@ -719,7 +719,13 @@ impl Reader<'_> {
             indices: triangles,
         };
         if let (Some(set), None) = (normal_set, &mesh.tangents) {
-            tangents::generate(&mut mesh, set);
+            if mesh.uvs.get(set).is_some() {
+                tangents::generate(&mut mesh, set);
+            } else {
+                // No texture coordinates, no tangent direction: zero
+                // tangents, which leave the normal as it is (texture.rs).
+                mesh.tangents = Some(vec![DVec4::new(0.0, 0.0, 0.0, 1.0); n]);
+            }
         }
         Ok(Some(GltfMesh {
             mesh,
