@@ -698,3 +698,193 @@ fn textures_beyond_the_device_limit_name_the_texture() {
     assert!(err.contains("maxImageDimension2D"), "{err}");
     fits.unwrap();
 }
+
+/// GPU against the f64 reference (`penumbra::reference`) on textured
+/// scenes: the same rule as tests/gpu/reference.rs, at least 99.5 % of the
+/// pixels within 2e-3 per channel. The reference implements the contract
+/// of `penumbra::scene::texture` independently, in f64; what differs is
+/// f32 rounding, which can move a nearest-texel or mip-level choice at a
+/// boundary for a pixel or two.
+#[track_caller]
+fn agree(name: &str, s: &Scene, spp: u32) {
+    let kernel = support::renderer().kernel();
+    let sampling = penumbra::render::Sampling {
+        spp,
+        seed: 7,
+        time_budget: None,
+    };
+    let g = support::render_with(s, kernel, sampling);
+    let r = penumbra::reference::render(s, &sampling, &kernel);
+    let (mut over, mut worst) = (0, 0.0f64);
+    for (a, b) in g.image.pixels.iter().zip(&r.image.pixels) {
+        let d = (0..3)
+            .map(|c| (f64::from(a[c]) - f64::from(b[c])).abs())
+            .fold(0.0, f64::max);
+        if d > 2e-3 {
+            over += 1;
+        }
+        worst = worst.max(d);
+    }
+    let n = g.image.pixels.len();
+    let agreeing = 1.0 - over as f64 / n as f64;
+    assert!(
+        agreeing >= 0.995,
+        "{name}: {over} of {n} pixels differ by more than 2e-3 (worst {worst:.3e})"
+    );
+}
+
+#[test]
+fn the_reference_agrees_on_textured_scenes() {
+    let t = texture(true);
+    for (filter, wrap) in [
+        (Filter::Nearest, Wrap::Repeat),
+        (Filter::Linear, Wrap::MirroredRepeat),
+        (Filter::Linear, Wrap::ClampToEdge),
+    ] {
+        let use_ = TextureRef {
+            sampler: sampler(filter, wrap, Wrap::Repeat),
+            transform: UvTransform {
+                offset: DVec2::new(0.1, -0.2),
+                rotation: 0.3,
+                scale: DVec2::new(1.5, 0.75),
+            },
+            ..TextureRef::new(0)
+        };
+        let s = scene(quad(DVec2::new(2.5, 1.5)), 32, use_, vec![t.clone()]);
+        agree(&format!("quad {filter:?} {wrap:?}"), &s, 1);
+    }
+    // Mask.
+    let use_ = TextureRef {
+        sampler: sampler(Filter::Nearest, Wrap::Repeat, Wrap::Repeat),
+        ..TextureRef::new(0)
+    };
+    let mut s = scene(quad(DVec2::ONE), 16, use_, vec![t.clone()]);
+    s.objects[0].maps = SurfaceMaps {
+        alpha_mode: AlphaMode::Mask { cutoff: 0.6 },
+        opacity: 1.0,
+        opacity_texture: Some(use_),
+        ..SurfaceMaps::default()
+    };
+    agree("mask", &s, 1);
+    let mut s2 = s.clone();
+    s2.objects[0].maps.alpha_mode = AlphaMode::Blend;
+    agree("blend quad", &s2, 4);
+    let maps = SurfaceMaps {
+        alpha_mode: AlphaMode::Mask { cutoff: 0.6 },
+        opacity: 1.0,
+        opacity_texture: Some(use_),
+        ..SurfaceMaps::default()
+    };
+    agree("mask shadow", &shadow_scene(maps, 16), 1);
+    let maps = SurfaceMaps {
+        alpha_mode: AlphaMode::Blend,
+        opacity: 0.3,
+        ..SurfaceMaps::default()
+    };
+    agree("blend shadow", &shadow_scene(maps, 16), 8);
+    // Receding plane with mips, and a textured sphere, in perspective.
+    let side = 64u32;
+    let texels = (0..side * side)
+        .map(|i| {
+            let (x, y) = (i % side, i / side);
+            let v = ((x * 7 + y * 13) % 256) as u8;
+            [v, 255 - v, (x * 4) as u8, 255]
+        })
+        .collect();
+    let big = Texture {
+        label: "big".into(),
+        file: None,
+        width: side,
+        height: side,
+        texels,
+        srgb: true,
+    };
+    for mip in [None, Some(Filter::Nearest), Some(Filter::Linear)] {
+        let use_ = TextureRef {
+            sampler: Sampler {
+                mip,
+                ..Sampler::default()
+            },
+            ..TextureRef::new(0)
+        };
+        let mut s = scene(quad(DVec2::ONE), 8, use_, vec![big.clone()]);
+        s.objects[0].shape = Shape::Plane(penumbra::scene::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Y,
+        });
+        s.objects.push(Object {
+            shape: Shape::Sphere(penumbra::scene::Sphere {
+                center: DVec3::new(0.5, 0.7, -4.0),
+                radius: 0.7,
+            }),
+            shader: 0,
+            maps: SurfaceMaps {
+                emission: Vec3::new(0.1, 0.05, 0.0),
+                emission_texture: Some(use_),
+                ..SurfaceMaps::default()
+            },
+        });
+        s.lights[0].kind = LightKind::Directional {
+            direction: DVec3::new(0.3, -1.0, -0.2).normalize(),
+        };
+        let eye = DVec3::new(0.0, 1.0, 0.0);
+        s.camera = Camera {
+            position: eye,
+            orientation: Camera::look_at(eye, DVec3::new(0.0, 0.0, -20.0), DVec3::Y).unwrap(),
+            projection: Projection::Perspective { vfov_deg: 40.0 },
+            width: 64,
+            height: 48,
+        };
+        agree(&format!("plane+sphere mip {mip:?}"), &s, 1);
+    }
+    // Normal map + vertex colours + emission on a mesh, perspective.
+    let theta = 30f64.to_radians();
+    let byte = |c: f64| ((c + 1.0) / 2.0 * 255.0).round() as u8;
+    let map = Texture {
+        label: "normal map".into(),
+        file: None,
+        width: 2,
+        height: 2,
+        texels: vec![
+            [byte(theta.sin()), 128, byte(theta.cos()), 255],
+            [128, byte(theta.sin()), byte(theta.cos()), 255],
+            [128, 128, 255, 255],
+            [byte(-theta.sin()), 128, byte(theta.cos()), 255],
+        ],
+        srgb: false,
+    };
+    let mut mesh = quad(DVec2::ONE);
+    mesh.normals = Some(vec![DVec3::Z; 4]);
+    mesh.tangents = Some(vec![glam::DVec4::new(1.0, 0.0, 0.0, -1.0); 4]);
+    mesh.colours = Some(
+        mesh.positions
+            .iter()
+            .map(|p| glam::Vec4::new(0.5 + 0.25 * p.x as f32, 0.7, 0.4 + 0.2 * p.y as f32, 1.0))
+            .collect(),
+    );
+    let mut s = scene(mesh, 24, TextureRef::new(0), vec![t.clone(), map]);
+    s.lights[0].kind = LightKind::Directional {
+        direction: -DVec3::new(1.0, 0.5, 1.0).normalize(),
+    };
+    if let Shader::Phong(p) = &mut s.shaders[0] {
+        p.specular = Vec3::splat(0.3);
+        p.shininess = 12.0;
+        p.ambient = Vec3::splat(0.2);
+        p.textures.specular = Some(TextureRef::new(0));
+    }
+    s.lights[0].ambient = Vec3::splat(0.1);
+    s.objects[0].maps = SurfaceMaps {
+        normal: Some((TextureRef::new(1), 0.8)),
+        emission: Vec3::new(0.05, 0.1, 0.0),
+        ..SurfaceMaps::default()
+    };
+    let eye = DVec3::new(0.3, 0.4, 3.0);
+    s.camera = Camera {
+        position: eye,
+        orientation: Camera::look_at(eye, DVec3::ZERO, DVec3::Y).unwrap(),
+        projection: Projection::Perspective { vfov_deg: 50.0 },
+        width: 32,
+        height: 32,
+    };
+    agree("normal map colours", &s, 1);
+}

@@ -143,6 +143,7 @@ fn main() -> anyhow::Result<()> {
         })
     };
     results.specialise = child(&args, p, "specialise", &[])?;
+    results.textures = Some(child(&args, p, "textures", &[])?);
     results.scaling = child(&args, p, "scaling", &[])?;
     if !args.no_knobs {
         results.knob_rounds = if args.quick { 1 } else { 3 };
@@ -176,6 +177,7 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
         "seminar" => serde_json::to_string(&parts::seminar::run(args)?)?,
         "scaling" => serde_json::to_string(&parts::scaling::run(args)?)?,
         "specialise" => serde_json::to_string(&parts::specialise::run(args)?)?,
+        "textures" => serde_json::to_string(&parts::textures::run(args)?)?,
         "cpu" => serde_json::to_string(&parts::cpu::run(args)?)?,
         "cli" => serde_json::to_string(&parts::cli::run(args)?)?,
         "peers" => serde_json::to_string(&parts::peers::run(args)?)?,

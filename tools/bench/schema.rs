@@ -144,6 +144,19 @@ pub struct KernelCompile {
     pub driver_compile_ms: Vec<f64>,
 }
 
+/// The textures section: interleaved frames of the textured, masked and
+/// untextured bunny scene.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct TexturesPart {
+    /// A = the bunny scene textured, B = untextured.
+    pub texturing: Pair,
+    /// A = the textured scene with the bunny's material a cut-out, B = the
+    /// textured scene.
+    pub mask: Pair,
+    /// Bytes of the textured scene's textures with their mip chains.
+    pub texture_bytes: u64,
+}
+
 /// Section 4: the specialised kernel against the general one, compiles and frames.
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
 pub struct SpecialisePart {
@@ -257,6 +270,10 @@ pub struct Results {
     pub seminar: SeminarPart,
     pub scaling: ScalingPart,
     pub specialise: SpecialisePart,
+    /// The cost of textures and of a cut-out; absent from reports written
+    /// before the benchmark measured it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub textures: Option<TexturesPart>,
     pub cpu: CpuPart,
     /// The CPU, from /proc/cpuinfo.
     #[serde(default)]

@@ -1,13 +1,15 @@
 //! The benchmark's scenes: the bunny scene as committed, and variants of it
 //! with the bunny replaced by procedural meshes of any size (same camera,
-//! light, ground and materials).
+//! light, ground and materials), and the bunny scene textured.
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use penumbra::loaders::{self, LoadOptions};
-use penumbra::scene::{Light, LightKind, Mesh, Scene, Shape};
+use penumbra::scene::{
+    AlphaMode, Light, LightKind, Mesh, Scene, Shader, Shape, SurfaceMaps, Texture, TextureRef,
+};
 
 /// Loads `scenes/bunny_scene.glb`.
 pub fn bunny_scene(root: &Path) -> anyhow::Result<Scene> {
@@ -194,4 +196,111 @@ pub fn with_lights(bunny: &Scene, count: usize) -> Scene {
         })
         .collect();
     scene
+}
+
+/// A procedural RGBA8 texture of `side`² texels: `cells`² squares of two
+/// colours with a thin dark grid, and alpha cut in stripes where `stripes`
+/// (0 or 255), as a colour (sRGB) texture.
+fn pattern(side: u32, cells: u32, a: [u8; 3], b: [u8; 3], stripes: bool, label: &str) -> Texture {
+    let cell = side / cells;
+    let texels = (0..side * side)
+        .map(|i| {
+            let (x, y) = (i % side, i / side);
+            let c = if (x / cell + y / cell) % 2 == 0 { a } else { b };
+            let grid = x % cell == 0 || y % cell == 0;
+            let rgb = if grid { c.map(|v| v / 3) } else { c };
+            let alpha = if stripes && (y / (cell / 2).max(1)) % 2 == 1 {
+                0
+            } else {
+                255
+            };
+            [rgb[0], rgb[1], rgb[2], alpha]
+        })
+        .collect();
+    Texture {
+        label: label.into(),
+        file: None,
+        width: side,
+        height: side,
+        texels,
+        srgb: true,
+    }
+}
+
+/// The bunny scene textured, for the benchmark's cost of texturing: the
+/// bunny gets cylindrical texture coordinates around its vertical axis and a
+/// 256² texture, the ground planar coordinates tiling a 512² texture 16
+/// times, both trilinear. With `masked`, the bunny's material is a cut-out
+/// (alpha MASK from the texture's stripes) as well.
+pub fn textured_bunny_scene(root: &Path, masked: bool) -> anyhow::Result<Scene> {
+    let mut scene = bunny_scene(root)?;
+    scene.textures = vec![
+        pattern(
+            256,
+            8,
+            [200, 160, 110],
+            [120, 80, 50],
+            masked,
+            "bunny pattern",
+        ),
+        pattern(
+            512,
+            8,
+            [190, 190, 180],
+            [90, 100, 110],
+            false,
+            "ground tiles",
+        ),
+    ];
+    let bunny_at = scene
+        .objects
+        .iter()
+        .position(|o| matches!(&o.shape, Shape::Mesh(m) if m.indices.len() > 2))
+        .expect("the bunny scene has a bunny");
+    for (i, o) in scene.objects.iter_mut().enumerate() {
+        let Shape::Mesh(m) = &mut o.shape else {
+            continue;
+        };
+        let Some((lo, hi)) = m.bounds() else { continue };
+        let centre = (lo + hi) * 0.5;
+        let size = (hi - lo).max(DVec3::splat(1e-9));
+        let bunny = i == bunny_at;
+        m.uvs = vec![m
+            .positions
+            .iter()
+            .map(|p| {
+                if bunny {
+                    let d = *p - centre;
+                    DVec2::new(
+                        0.5 + d.z.atan2(d.x) / std::f64::consts::TAU,
+                        (hi.y - p.y) / size.y,
+                    )
+                } else {
+                    DVec2::new((p.x - lo.x) / size.x, (p.z - lo.z) / size.z)
+                }
+            })
+            .collect()];
+        let texture = if bunny { 0 } else { 1 };
+        let mut use_ = TextureRef::new(texture);
+        if !bunny {
+            use_.transform.scale = DVec2::splat(16.0);
+        }
+        let Shader::Phong(mut p) = scene.shaders[o.shader].clone() else {
+            anyhow::bail!("the bunny scene's materials are Phong");
+        };
+        p.textures.diffuse = Some(use_);
+        scene.shaders.push(Shader::Phong(p));
+        o.shader = scene.shaders.len() - 1;
+        if bunny && masked {
+            o.maps = SurfaceMaps {
+                alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+                opacity_texture: Some(use_),
+                ..SurfaceMaps::default()
+            };
+        }
+    }
+    scene
+        .validate()
+        .map_err(|e| anyhow::anyhow!("the textured bunny scene: {e:?}"))?;
+    Ok(scene)
 }

@@ -10,4 +10,5 @@ pub mod profile;
 pub mod scaling;
 pub mod seminar;
 pub mod specialise;
+pub mod textures;
 pub mod throughput;

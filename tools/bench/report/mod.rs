@@ -15,6 +15,7 @@ pub mod seminar;
 pub mod specialise;
 pub mod standing;
 pub mod targets;
+pub mod textures;
 pub mod throughput;
 pub mod verdict;
 
@@ -28,6 +29,7 @@ const SECTIONS: &[fn(&mut String, &Results)] = &[
     seminar::section,
     scaling::section,
     specialise::section,
+    textures::section,
     knobs::section,
     targets::section,
     targets::profile,
