@@ -21,6 +21,7 @@ mod camera;
 mod checker;
 mod default_light;
 mod hard_cases;
+mod khronos;
 mod large_scenes;
 mod lights;
 mod output;
