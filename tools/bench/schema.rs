@@ -155,6 +155,9 @@ pub struct TexturesPart {
     pub mask: Pair,
     /// Bytes of the textured scene's textures with their mip chains.
     pub texture_bytes: u64,
+    /// The device the part ran on.
+    #[serde(default)]
+    pub device: Device,
 }
 
 /// Section 4: the specialised kernel against the general one, compiles and frames.

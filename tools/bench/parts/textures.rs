@@ -5,7 +5,7 @@
 
 use penumbra::render::KernelOptions;
 
-use crate::measure::{interleave, renderer, upload};
+use crate::measure::{device, interleave, renderer, upload};
 use crate::schema::TexturesPart;
 use crate::Args;
 
@@ -43,5 +43,6 @@ pub fn run(args: &Args) -> anyhow::Result<TexturesPart> {
         texturing,
         mask,
         texture_bytes,
+        device: device(&r),
     })
 }
