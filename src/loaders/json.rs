@@ -13,8 +13,9 @@ use serde::Deserialize;
 use super::{LoadOptions, Loaded};
 use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::scene::{
-    Camera, Checker, Light, LightKind, Object, ParamField, ParamType, ParamValue, Phong, Plane,
-    Projection, Scene, Shader, ShaderId, Shape, Sphere, Triangle, WgslShader,
+    Camera, Checker, Filter, Light, LightKind, Object, ParamField, ParamType, ParamValue, Phong,
+    PhongTextures, Plane, Projection, Sampler, Scene, Shader, ShaderId, Shape, Sphere, Texture,
+    TextureId, TextureRef, Triangle, UvTransform, WgslShader, Wrap,
 };
 use crate::SceneError;
 
@@ -77,9 +78,12 @@ enum ShaderKind {
 struct ShaderFile {
     #[serde(rename = "type")]
     kind: ShaderKind,
-    ambient: Option<C3>,
-    diffuse: Option<C3>,
-    specular: Option<C3>,
+    /// `[r, g, b]` or a texture object ([`Reader::colour_or_texture`]).
+    ambient: Option<serde_json::Value>,
+    /// As `ambient`.
+    diffuse: Option<serde_json::Value>,
+    /// As `ambient`.
+    specular: Option<serde_json::Value>,
     shininess: Option<f32>,
     size: Option<f64>,
     even: Option<String>,
@@ -188,8 +192,45 @@ fn fields_for(
     Ok(())
 }
 
-/// The shaders of a scene file, their ids by name, and the WGSL files read.
-type Shaders = (Vec<Shader>, BTreeMap<String, ShaderId>, Vec<PathBuf>);
+/// The shaders of a scene file, their ids by name, the WGSL files read and
+/// the textures they sample.
+struct Shaders {
+    shaders: Vec<Shader>,
+    ids: BTreeMap<String, ShaderId>,
+    wgsl_files: Vec<PathBuf>,
+    textures: Textures,
+}
+
+/// The texture files read so far: the scene's texture list, and each file's
+/// place in it, so that a file named twice is read and uploaded once.
+#[derive(Default)]
+struct Textures {
+    /// In the order first named: [`Scene::textures`].
+    list: Vec<Texture>,
+    /// By the file's canonical path (or its path as named, when it cannot be
+    /// resolved).
+    by_path: BTreeMap<PathBuf, TextureId>,
+}
+
+/// The keys of a texture object (`{"texture": "wood.png", ...}`).
+const TEXTURE_KEYS: [&str; 4] = ["texture", "scale", "filter", "wrap"];
+
+/// What a texture object may stand for, for the message when one is found
+/// elsewhere.
+const TEXTURE_PLACES: &str = "a texture (`{\"texture\": ...}`) can only be the `ambient`, `diffuse` or `specular` colour of a phong or blinn_phong shader, or the value of a u32 Params field of a wgsl shader";
+
+/// A JSON value described for messages.
+fn describe(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::Null => "null".to_string(),
+        Value::Bool(b) => format!("{b}"),
+        Value::Number(n) => format!("{n}"),
+        Value::String(s) => format!("the string {s:?}"),
+        Value::Array(a) => format!("an array of {}", a.len()),
+        Value::Object(_) => "an object".to_string(),
+    }
+}
 
 /// The WGSL files read so far, by resolved path: text and reflection.
 type WgslFiles = BTreeMap<PathBuf, (String, crate::scene::shading::Reflection)>;
@@ -369,16 +410,239 @@ impl Reader<'_> {
         Ok((path, source, r))
     }
 
+    /// The colour field `at` of a phong or blinn_phong shader: `[r, g, b]`
+    /// (`default` when absent), or a texture object, which makes the colour
+    /// (1, 1, 1) and returns the texture's use.
+    fn colour_or_texture(
+        &self,
+        at: &str,
+        v: Option<&serde_json::Value>,
+        default: C3,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<(Vec3, Option<TextureRef>), SceneError> {
+        use serde_json::Value;
+        match v {
+            None | Some(Value::Null) => Ok((self.colour(at, default)?, None)),
+            Some(a @ Value::Array(_)) => {
+                let c: C3 =
+                    serde_json::from_value(a.clone()).map_err(|e| self.err(at, e.to_string()))?;
+                Ok((self.colour(at, c)?, None))
+            }
+            Some(Value::Object(m)) => {
+                let t = self.texture_use(at, m, base, guard, textures)?;
+                Ok((Vec3::ONE, Some(t)))
+            }
+            Some(other) => Err(self.err(
+                at,
+                format!(
+                    "must be a colour [r, g, b] or a texture {{\"texture\": \"file.png\"}}, got {}",
+                    describe(other)
+                ),
+            )),
+        }
+    }
+
+    /// A texture object at `at`: `{"texture": FILE}` with optional
+    /// `"scale"`, `"filter"` and `"wrap"`; the file is read relative to
+    /// `base` (once per file) and decoded as an sRGB colour texture.
+    fn texture_use(
+        &self,
+        at: &str,
+        m: &serde_json::Map<String, serde_json::Value>,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<TextureRef, SceneError> {
+        use serde_json::Value;
+        for key in m.keys() {
+            if !TEXTURE_KEYS.contains(&key.as_str()) {
+                return Err(self.err(
+                    format!("{at}.{key}"),
+                    format!(
+                        "unknown field `{key}` of a texture, expected one of `texture`, `scale`, `filter`, `wrap`"
+                    ),
+                ));
+            }
+        }
+        let field = |k: &str| format!("{at}.{k}");
+        let file = match m.get("texture") {
+            Some(Value::String(f)) if !f.is_empty() => f,
+            Some(other) => {
+                return Err(self.err(
+                    field("texture"),
+                    format!("must be an image file name, got {}", describe(other)),
+                ))
+            }
+            None => {
+                return Err(self.err(
+                    at,
+                    "missing field `texture` (the image file, relative to the scene file)",
+                ))
+            }
+        };
+        let texture =
+            self.texture_file(&field("texture"), Path::new(file), base, guard, textures)?;
+        let (mag, min, mip) = match m.get("filter") {
+            None => (Filter::Linear, Filter::Linear, Some(Filter::Linear)),
+            Some(Value::String(f)) => match f.as_str() {
+                "nearest" => (Filter::Nearest, Filter::Nearest, None),
+                "bilinear" => (Filter::Linear, Filter::Linear, Some(Filter::Nearest)),
+                "trilinear" => (Filter::Linear, Filter::Linear, Some(Filter::Linear)),
+                _ => {
+                    return Err(self.err(
+                        field("filter"),
+                        format!(
+                        "unknown filter {f:?}, expected \"nearest\", \"bilinear\" or \"trilinear\""
+                    ),
+                    ))
+                }
+            },
+            Some(other) => {
+                return Err(self.err(
+                    field("filter"),
+                    format!(
+                        "must be \"nearest\", \"bilinear\" or \"trilinear\", got {}",
+                        describe(other)
+                    ),
+                ))
+            }
+        };
+        let wrap_of = |at: &str, v: &Value| -> Result<Wrap, SceneError> {
+            match v.as_str() {
+                Some("repeat") => Ok(Wrap::Repeat),
+                Some("mirrored_repeat") => Ok(Wrap::MirroredRepeat),
+                Some("clamp") => Ok(Wrap::ClampToEdge),
+                Some(w) => Err(self.err(
+                    at,
+                    format!("unknown wrap mode {w:?}, expected \"repeat\", \"mirrored_repeat\" or \"clamp\""),
+                )),
+                None => Err(self.err(
+                    at,
+                    format!(
+                        "must be \"repeat\", \"mirrored_repeat\" or \"clamp\" (or an array of two: u, v), got {}",
+                        describe(v)
+                    ),
+                )),
+            }
+        };
+        let (wrap_u, wrap_v) = match m.get("wrap") {
+            None => (Wrap::Repeat, Wrap::Repeat),
+            Some(Value::Array(a)) if a.len() == 2 => (
+                wrap_of(&format!("{at}.wrap[0]"), &a[0])?,
+                wrap_of(&format!("{at}.wrap[1]"), &a[1])?,
+            ),
+            Some(v) => {
+                let w = wrap_of(&field("wrap"), v)?;
+                (w, w)
+            }
+        };
+        let scale = match m.get("scale") {
+            None => glam::DVec2::ONE,
+            Some(Value::Number(n)) => glam::DVec2::splat(n.as_f64().unwrap_or(f64::NAN)),
+            Some(Value::Array(a)) if a.len() == 2 && a.iter().all(Value::is_number) => {
+                glam::DVec2::new(
+                    a[0].as_f64().unwrap_or(f64::NAN),
+                    a[1].as_f64().unwrap_or(f64::NAN),
+                )
+            }
+            Some(other) => {
+                return Err(self.err(
+                    field("scale"),
+                    format!(
+                        "must be a number or an array of two numbers [su, sv], got {}",
+                        describe(other)
+                    ),
+                ))
+            }
+        };
+        // f32 on the GPU: finite there too, and not zero (that would squash
+        // the texture to one texel).
+        let s32 = scale.as_vec2();
+        if !s32.is_finite() || s32.x == 0.0 || s32.y == 0.0 {
+            return Err(self.err(
+                field("scale"),
+                format!("must be finite and non-zero, got {scale}"),
+            ));
+        }
+        Ok(TextureRef {
+            texture,
+            sampler: Sampler {
+                mag,
+                min,
+                mip,
+                wrap_u,
+                wrap_v,
+            },
+            tex_coord: 0,
+            transform: UvTransform {
+                scale,
+                ..UvTransform::default()
+            },
+        })
+    }
+
+    /// The texture file `rel` named at `field`, relative to `base`: its id
+    /// in `textures`, reading and decoding it (through the guard) the first
+    /// time it is named.
+    fn texture_file(
+        &self,
+        field: &str,
+        rel: &Path,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<TextureId, SceneError> {
+        let path = base.join(rel);
+        let key = path.canonicalize().unwrap_or_else(|_| path.clone());
+        if let Some(&id) = textures.by_path.get(&key) {
+            return Ok(id);
+        }
+        if !path.exists() {
+            return Err(self.err(field, format!("no such file: {}", path.display())));
+        }
+        let texture = read_texture(&path, true, guard).map_err(|e| self.err(field, e.0))?;
+        textures.list.push(texture);
+        let id = textures.list.len() - 1;
+        textures.by_path.insert(key, id);
+        Ok(id)
+    }
+
     /// The value of Params field `field` of shader file `file` from the JSON
     /// value `v` at `at`.
+    ///
+    /// A u32 field may be given a texture object, which reads the texture
+    /// ([`Reader::texture_use`]) and makes the value
+    /// [`ParamValue::Texture`].
+    #[allow(clippy::too_many_arguments)]
     fn param(
         &self,
         at: &str,
         file: &str,
         field: &ParamField,
         v: &serde_json::Value,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
     ) -> Result<ParamValue, SceneError> {
         use serde_json::Value;
+        if let Value::Object(m) = v {
+            if field.ty == ParamType::U32 {
+                return Ok(ParamValue::Texture(
+                    self.texture_use(at, m, base, guard, textures)?,
+                ));
+            }
+            if m.contains_key("texture") {
+                return Err(self.err(
+                    at,
+                    format!(
+                        "Params field `{}` of {file} is {}; only a u32 field can take a texture",
+                        field.name, field.ty
+                    ),
+                ));
+            }
+        }
         let what = |v: &Value| match v {
             Value::Null => "null".to_string(),
             Value::Bool(b) => format!("{b}"),
@@ -461,6 +725,7 @@ impl Reader<'_> {
         base: &Path,
         guard: &super::guard::Guard,
         read: &mut WgslFiles,
+        textures: &mut Textures,
     ) -> Result<WgslShader, SceneError> {
         let rel = s.file.clone().unwrap_or_default();
         let (path, source, r) = self.wgsl_file(at, &rel, base, guard, read)?;
@@ -487,7 +752,7 @@ impl Reader<'_> {
                     ),
                 ));
             };
-            values.push(self.param(&fat, &file, field, v)?);
+            values.push(self.param(&fat, &file, field, v, base, guard, textures)?);
         }
         Ok(WgslShader {
             path,
@@ -499,7 +764,7 @@ impl Reader<'_> {
     }
 
     /// The shaders of the file, in name order (a shader's id is its place),
-    /// and every WGSL file read.
+    /// every WGSL file read and the textures the shaders sample.
     fn shaders(
         &self,
         files: &BTreeMap<String, ShaderFile>,
@@ -507,6 +772,7 @@ impl Reader<'_> {
         guard: &super::guard::Guard,
     ) -> Result<Shaders, SceneError> {
         let mut read = BTreeMap::new();
+        let mut textures = Textures::default();
         let ids: BTreeMap<String, ShaderId> = files
             .keys()
             .enumerate()
@@ -514,15 +780,22 @@ impl Reader<'_> {
             .collect();
         let mut shaders = Vec::new();
         for (name, s) in files {
-            shaders.push(self.shader(name, s, &ids, base, guard, &mut read)?);
+            shaders.push(self.shader(name, s, &ids, base, guard, &mut read, &mut textures)?);
         }
         self.checker_cycles(&shaders, &ids)?;
-        Ok((shaders, ids, read.into_keys().collect()))
+        Ok(Shaders {
+            shaders,
+            ids,
+            wgsl_files: read.into_keys().collect(),
+            textures,
+        })
     }
 
     /// Shader `name`: the fields its kind needs (and no others), its
     /// colours and sizes, a checker's children by name in `ids`, a `wgsl`
-    /// shader's file and params ([`Reader::wgsl`]).
+    /// shader's file and params ([`Reader::wgsl`]); the textures they name
+    /// go into `textures`.
+    #[allow(clippy::too_many_arguments)]
     fn shader(
         &self,
         name: &str,
@@ -531,6 +804,7 @@ impl Reader<'_> {
         base: &Path,
         guard: &super::guard::Guard,
         read: &mut WgslFiles,
+        textures: &mut Textures,
     ) -> Result<Shader, SceneError> {
         let at = format!("shaders.{name}");
         let f = |k: &str| format!("{at}.{k}");
@@ -568,7 +842,9 @@ impl Reader<'_> {
             return Err(self.err(f("params"), format!("not a field of {kind}")));
         }
         if wgsl {
-            return Ok(Shader::Wgsl(self.wgsl(&at, s, base, guard, read)?));
+            return Ok(Shader::Wgsl(
+                self.wgsl(&at, s, base, guard, read, textures)?,
+            ));
         }
         Ok(if phong {
             let shininess = s.shininess.unwrap_or(1.0);
@@ -578,11 +854,21 @@ impl Reader<'_> {
                     format!("must be finite and >= 0, got {shininess}"),
                 ));
             }
+            let mut colour = |k: &str, v: &Option<serde_json::Value>| {
+                self.colour_or_texture(&f(k), v.as_ref(), [0.0; 3], base, guard, textures)
+            };
+            let (ambient, ambient_t) = colour("ambient", &s.ambient)?;
+            let (diffuse, diffuse_t) = colour("diffuse", &s.diffuse)?;
+            let (specular, specular_t) = colour("specular", &s.specular)?;
             let p = Phong {
-                textures: Default::default(),
-                ambient: self.colour(&f("ambient"), s.ambient.unwrap_or_default())?,
-                diffuse: self.colour(&f("diffuse"), s.diffuse.unwrap_or_default())?,
-                specular: self.colour(&f("specular"), s.specular.unwrap_or_default())?,
+                textures: PhongTextures {
+                    ambient: ambient_t,
+                    diffuse: diffuse_t,
+                    specular: specular_t,
+                },
+                ambient,
+                diffuse,
+                specular,
                 shininess,
             };
             if s.kind == ShaderKind::Phong {
@@ -933,14 +1219,54 @@ fn parse(path: &Path, guard: &super::guard::Guard) -> Result<SceneFile, SceneErr
     let de = &mut serde_json::Deserializer::from_str(&text);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let field = e.path().to_string();
+        let misplaced = is_texture_object(&text, e.path());
         let inner = e.into_inner();
+        let field = if field == "." { String::new() } else { field };
+        if misplaced {
+            return SceneError::new(path, field, TEXTURE_PLACES);
+        }
         // serde_json appends " at line L column C"; keep it, it helps.
-        SceneError::new(
-            path,
-            if field == "." { String::new() } else { field },
-            inner.to_string(),
-        )
+        SceneError::new(path, field, inner.to_string())
     })
+}
+
+/// Whether the value at `at` in the JSON `text` is a texture object (has a
+/// `texture` key): a texture where the format takes none.
+fn is_texture_object(text: &str, at: &serde_path_to_error::Path) -> bool {
+    use serde_path_to_error::Segment;
+    let Ok(root) = serde_json::from_str::<serde_json::Value>(text) else {
+        return false;
+    };
+    let mut v = &root;
+    for seg in at.iter() {
+        let next = match seg {
+            Segment::Seq { index } => v.get(index),
+            Segment::Map { key } => v.get(key),
+            Segment::Enum { .. } | Segment::Unknown => None,
+        };
+        match next {
+            Some(n) => v = n,
+            None => return false,
+        }
+    }
+    v.as_object().is_some_and(|m| m.contains_key("texture"))
+}
+
+/// Reads the image file `path` through `guard` and decodes it
+/// ([`super::texture::decode`]; `srgb`: a colour texture) into a texture
+/// labelled and tagged with its path, so that `penumbra watch` can read it
+/// again when it changes. The message names the file.
+pub fn read_texture(
+    path: &Path,
+    srgb: bool,
+    guard: &super::guard::Guard,
+) -> Result<Texture, super::guard::Refused> {
+    let bytes = guard.read(path, "texture")?;
+    let label = path.display().to_string();
+    let mut t = super::texture::decode(&bytes, None, &label, srgb, guard)
+        .map_err(|e| super::guard::Refused(format!("the texture {label} {}", e.0)))?;
+    t.file = Some(path.to_path_buf());
+    Ok(t)
 }
 
 /// Reads a JSON scene file: parses it, then reads the camera, the
@@ -953,10 +1279,19 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
     let camera = r.camera(&file.camera, opts)?;
     let background = r.colour("background", file.background)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let (shaders, ids, shader_files) = r.shaders(&file.shaders, base, &guard)?;
+    let Shaders {
+        shaders,
+        ids,
+        wgsl_files,
+        textures,
+    } = r.shaders(&file.shaders, base, &guard)?;
+    let texture_files = textures.list.iter().filter_map(|t| t.file.clone());
+    let mut files = vec![path.to_path_buf()];
+    files.extend(wgsl_files);
+    files.extend(texture_files);
     let mut loaded = Loaded {
         scene: Scene {
-            textures: vec![],
+            textures: textures.list,
             camera,
             background,
             shaders,
@@ -964,9 +1299,8 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
             lights: Vec::new(),
         },
         notes: Vec::new(),
-        files: vec![path.to_path_buf()],
+        files,
     };
-    loaded.files.extend(shader_files);
     for (i, o) in file.objects.iter().enumerate() {
         r.object(i, o, &ids, base, &guard, &mut loaded)?;
     }

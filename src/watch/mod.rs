@@ -6,7 +6,8 @@
 //! changes; rebuilds only what changed ([`stage::Session::apply`]: a shader
 //! edit recompiles only the pipelines whose files changed and keeps the
 //! scene upload, and after a shading edit the hit records too; a scene edit
-//! re-uploads and keeps the pipelines unless the scene's features change); renders a
+//! re-uploads and keeps the pipelines unless the scene's features change; a
+//! texture file edit replaces that texture's texels only); renders a
 //! quarter-resolution preview and then the full image, writing the output
 //! atomically after each ([`stage::Session::render_stages`]); and reports
 //! each reload as an [`Event`]. Errors (a broken shader or scene, a failed
@@ -24,6 +25,7 @@ pub mod files;
 pub mod server;
 pub mod stage;
 
+use std::collections::BTreeSet;
 use std::io::Write as _;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -112,6 +114,13 @@ pub struct Reload {
     pub compile: Option<CompileTimes>,
     /// Loading and uploading the scene after a scene edit.
     pub upload: Option<Duration>,
+    /// The texture files whose change triggered it (normalised; also in
+    /// `changed`): a texture edit alone replaces those textures and does not
+    /// count as a scene change in `changes`.
+    pub textures: Vec<PathBuf>,
+    /// Decoding and replacing the edited textures, when a texture edit was
+    /// applied without reloading the scene.
+    pub texture_replace: Option<Duration>,
     /// The stages written, preview first.
     pub stages: Vec<StageReport>,
     /// A newer edit cancelled the refinement.
@@ -124,6 +133,9 @@ pub struct Reload {
 }
 
 /// What the loop reports.
+// One event per reload: the size of the `Reload` variant costs nothing, and
+// boxing it would only complicate every receiver.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Event {
     /// The watcher is armed: edits from now on are seen.
@@ -282,6 +294,14 @@ impl Watch {
     /// the [`Event::Reload`].
     fn reload(&mut self, b: files::Batch) {
         let number = self.number;
+        // The last good scene's texture files (watched with the scene's):
+        // an edit of one alone replaces that texture.
+        let texture_files: BTreeSet<PathBuf> = self
+            .session
+            .texture_files()
+            .iter()
+            .map(|p| normalise(p))
+            .collect();
         let changes = if number == 0 {
             Changes {
                 shaders: true,
@@ -291,10 +311,22 @@ impl Watch {
             let set = self.watcher.set();
             Changes {
                 shaders: b.paths.iter().any(|p| set.shaders.contains(p)),
-                scene: b.paths.iter().any(|p| set.scene.contains(p)),
+                scene: b
+                    .paths
+                    .iter()
+                    .any(|p| set.scene.contains(p) && !texture_files.contains(p)),
             }
         };
-        let applied = self.session.apply(changes);
+        let textures: Vec<PathBuf> = if number == 0 {
+            Vec::new()
+        } else {
+            b.paths
+                .iter()
+                .filter(|p| texture_files.contains(*p))
+                .cloned()
+                .collect()
+        };
+        let applied = self.session.apply_edits(changes, &textures);
         // The scene may now reference other files.
         let new_set = watch_set(&self.session, &self.shader_files);
         if &new_set != self.watcher.set() {
@@ -322,6 +354,8 @@ impl Watch {
             changes,
             compile: applied.compile,
             upload: applied.upload,
+            textures,
+            texture_replace: applied.texture_replace,
             stages,
             cancelled,
             errors,
@@ -336,6 +370,7 @@ impl Watch {
                 .scene_error
                 .iter()
                 .chain(&self.session.shader_error)
+                .chain(self.session.texture_errors())
                 .cloned()
                 .chain(
                     reload
@@ -422,6 +457,9 @@ impl Reload {
             if self.changes.scene {
                 kinds.push("scene");
             }
+            if !self.textures.is_empty() {
+                kinds.push("textures");
+            }
             let names: Vec<String> = self.changed.iter().map(|p| describe(p)).collect();
             format!("{} ({})", kinds.join("+"), names.join(", "))
         };
@@ -451,6 +489,9 @@ impl Reload {
         if let Some(u) = self.upload {
             parts.push(format!("load+upload {}", ms(u)));
         }
+        if let Some(t) = self.texture_replace {
+            parts.push(format!("texture replace {}", ms(t)));
+        }
         for (i, s) in self.stages.iter().enumerate() {
             let name = if divisors[i] > 1 { "preview" } else { "full" };
             parts.push(format!(
@@ -477,7 +518,8 @@ impl Reload {
     }
 }
 
-/// The files to watch: the scene's as scene files, and as shaders the
+/// The files to watch: the scene's as scene files (its texture files among
+/// them: [`Watch::reload`] tells their edits apart), and as shaders the
 /// engine's `shader_files` and the scene's user shader files (an edit of one
 /// recompiles only its shade pipelines and keeps the upload and the hit
 /// records).

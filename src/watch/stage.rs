@@ -12,14 +12,24 @@
 //! next render reuses the hit records. An edit that changes a file's
 //! `struct Params` cannot keep the uploaded parameters, so it reloads the
 //! scene as well, which checks the JSON's `params` against the new fields.
+//!
+//! Texture files ([`crate::scene::Texture::file`]) are watched with the
+//! scene's files, but an edit of one alone decodes the file again and
+//! replaces that texture's texels on the device ([`Renderer::replace_texture`]), keeping the upload, the pipelines
+//! and everything else. A texture whose size or colour space changed cannot
+//! be replaced in place, so then the scene is reloaded. A file that no
+//! longer decodes is reported, like a broken scene, and the last good
+//! texture (and image) kept.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use super::files::normalise;
 use crate::loaders::{self, LoadOptions};
 use crate::render::shade::PARAMS_CHANGED;
 use crate::render::{Image, ReloadReport, RenderError, Renderer, UploadedScene};
-use crate::scene::Shader;
+use crate::scene::{Shader, Texture};
 
 /// Whether a reload failed because a user shader's `Params` changed.
 fn params_changed(e: &RenderError) -> bool {
@@ -31,7 +41,8 @@ fn params_changed(e: &RenderError) -> bool {
 pub struct Changes {
     /// A shader source.
     pub shaders: bool,
-    /// The scene file or a file it references.
+    /// The scene file or a file it references (other than the texture
+    /// files, which [`Session::apply_edits`] takes apart).
     pub scene: bool,
 }
 
@@ -75,6 +86,9 @@ pub struct Applied {
     pub compile: Option<CompileTimes>,
     /// Time to load and upload the scene, when it was reloaded.
     pub upload: Option<Duration>,
+    /// Time to decode and replace the edited textures, when they were
+    /// replaced without reloading the scene.
+    pub texture_replace: Option<Duration>,
     /// Errors, each ready to print (file:line:col, source line, caret).
     pub errors: Vec<String>,
     /// Whether there is something new to render.
@@ -105,6 +119,11 @@ pub struct Session {
     scene_files: Vec<PathBuf>,
     /// The user WGSL files among them (the scene's `wgsl` shaders).
     user_shaders: Vec<PathBuf>,
+    /// The last good scene's textures as uploaded (edits replace them).
+    textures: Vec<Texture>,
+    /// Texture files that do not decode now, by normalised path: the error
+    /// (the upload keeps their last good texels).
+    texture_errors: BTreeMap<PathBuf, String>,
     /// The shaders on disk do not compile (the last good kernel is in use).
     pub shader_error: Option<String>,
     /// The scene on disk does not load (the last good upload is in use).
@@ -121,6 +140,8 @@ impl Session {
             uploaded: None,
             scene_files: vec![scene_path.to_path_buf()],
             user_shaders: Vec::new(),
+            textures: Vec::new(),
+            texture_errors: BTreeMap::new(),
             shader_error: None,
             scene_error: None,
         }
@@ -139,6 +160,26 @@ impl Session {
         &self.user_shaders
     }
 
+    /// The image files of the last good scene's textures, as the scene
+    /// gives them (textures embedded in other files have none); also in
+    /// [`Session::scene_files`]. The loop watches them as textures.
+    pub fn texture_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = self
+            .textures
+            .iter()
+            .filter_map(|t| t.file.clone())
+            .collect();
+        files.sort();
+        files.dedup();
+        files
+    }
+
+    /// The errors of texture files that do not decode now (the last good
+    /// texture of each is in use), in file order.
+    pub fn texture_errors(&self) -> impl Iterator<Item = &String> {
+        self.texture_errors.values()
+    }
+
     /// The full image size of the current upload.
     pub fn size(&self) -> Option<(u32, u32)> {
         self.uploaded.as_ref().map(UploadedScene::size)
@@ -154,12 +195,33 @@ impl Session {
     /// a scene that failed to load (it may have failed on a shader file), and
     /// one that changes a user shader's `Params` reloads the scene, so that
     /// its JSON `params` are checked against the new fields.
+    ///
     pub fn apply(&mut self, changes: Changes) -> Applied {
+        self.apply_edits(changes, &[])
+    }
+
+    /// [`Session::apply`] with texture edits: `textures` are the changed
+    /// texture files (normalised, [`super::files::normalise`]; see
+    /// [`Session::texture_files`]). Without a scene edit they replace those
+    /// textures only ([`Session::replace_textures`]); they also retry a scene
+    /// that failed to load (it may have failed on one of them).
+    pub fn apply_edits(&mut self, changes: Changes, textures: &[PathBuf]) -> Applied {
         let mut out = Applied::default();
-        let mut scene = changes.scene || (changes.shaders && self.scene_error.is_some());
+        let edited = !textures.is_empty();
+        let retry = (changes.shaders || edited) && self.scene_error.is_some();
+        let mut scene = changes.scene || retry;
+        if edited && !scene && !self.replace_textures(textures, &mut out) {
+            // A texture that cannot be replaced in place: upload it all.
+            scene = true;
+        }
         let mut retried = false;
         loop {
             let reloaded = scene && self.reload_scene(&mut out);
+            if reloaded {
+                // The scene's textures were read again, and any texture
+                // timing is part of the upload's.
+                out.texture_replace = None;
+            }
             // After a Params change, a scene that does not load (its JSON
             // no longer fits the file) is the error to show.
             if !reloaded && (retried || !changes.shaders) {
@@ -205,6 +267,61 @@ impl Session {
         out
     }
 
+    /// Decodes the texture files `paths` (normalised) again and replaces
+    /// the textures read from them in the upload. A file that does not
+    /// decode is an error (and its texture keeps its last good texels);
+    /// `out.render` is set when a texture was replaced. Returns false when a
+    /// texture cannot be replaced in place (its size or colour space
+    /// changed) or nothing is uploaded yet: then the scene must be reloaded.
+    fn replace_textures(&mut self, paths: &[PathBuf], out: &mut Applied) -> bool {
+        let t0 = Instant::now();
+        let Some(up) = &mut self.uploaded else {
+            return false;
+        };
+        let guard = loaders::guard::Guard::new(&self.scene_path, &self.load);
+        for path in paths {
+            let ids: Vec<usize> = (0..self.textures.len())
+                .filter(|&i| self.textures[i].file.as_deref().map(normalise).as_ref() == Some(path))
+                .collect();
+            let mut failed = None;
+            for &id in &ids {
+                let old = &self.textures[id];
+                let file = old.file.clone().unwrap_or_else(|| path.clone());
+                let new = match loaders::json::read_texture(&file, old.srgb, &guard) {
+                    Ok(t) => Texture {
+                        label: old.label.clone(),
+                        ..t
+                    },
+                    Err(e) => {
+                        failed = Some(format!(
+                            "texture error: {}; the last good texture is kept",
+                            e.0
+                        ));
+                        break;
+                    }
+                };
+                if self.renderer.replace_texture(up, id, &new).is_err() {
+                    return false;
+                }
+                self.textures[id] = new;
+                out.render = true;
+            }
+            match failed {
+                Some(e) => {
+                    out.errors.push(e.clone());
+                    self.texture_errors.insert(path.clone(), e);
+                }
+                None => {
+                    self.texture_errors.remove(path);
+                }
+            }
+        }
+        if out.render {
+            out.texture_replace = Some(t0.elapsed());
+        }
+        true
+    }
+
     /// Loads and uploads the scene; on success replaces the upload and
     /// returns true, else keeps the last good one and records the error.
     fn reload_scene(&mut self, out: &mut Applied) -> bool {
@@ -236,6 +353,8 @@ impl Session {
                 self.user_shaders.sort();
                 self.user_shaders.dedup();
                 self.scene_files = loaded.files;
+                self.textures = loaded.scene.textures;
+                self.texture_errors.clear();
                 self.scene_error = None;
                 out.upload = Some(t0.elapsed());
                 out.render = true;

@@ -14,6 +14,7 @@ mod bad_input;
 mod farm_batch;
 mod farm_slurm;
 mod farm_split;
+mod json_textures;
 mod metrics;
 mod setup_script;
 mod vector_width;

@@ -1,9 +1,11 @@
 //! The tests of library code that needs no Vulkan device and starts no
-//! process: the BRDFs' known truths and the glTF and WGSL-shader loaders.
+//! process: the BRDFs' known truths and the glTF and WGSL-shader loaders,
+//! and textures in JSON scenes.
 //! One test binary, one module per concept.
 //!
 //! One concept: `cargo test --test cpu gltf_loader::` (docs/tests.md).
 
 mod brdf;
 mod gltf_loader;
+mod json_textures;
 mod wgsl_shaders;

@@ -21,6 +21,7 @@ mod camera;
 mod checker;
 mod default_light;
 mod hard_cases;
+mod json_textures;
 mod khronos;
 mod large_scenes;
 mod lights;
