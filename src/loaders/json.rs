@@ -1151,20 +1151,36 @@ impl Reader<'_> {
         let doc = super::gltf::read_with(&mesh_path, guard)?;
         loaded.notes.extend(doc.notes);
         loaded.files.extend(doc.files);
-        let normal_m = DMat3::from_mat4(m).inverse().transpose();
+        // The file's textures follow the scene's: its materials' texture
+        // ids move by this much.
+        let offset = loaded.scene.textures.len();
+        if shader.is_none() {
+            loaded.scene.textures.extend(doc.textures);
+        }
+        let moved = |t: &mut Option<TextureRef>| {
+            if let Some(t) = t {
+                t.texture += offset;
+            }
+        };
+        let linear = DMat3::from_mat4(m);
+        let normal_m = linear.inverse().transpose();
         for gm in doc.meshes {
-            let shader = match shader {
-                Some(s) => s,
+            let (shader, maps) = match shader {
+                // The scene's shader replaces the material, maps included.
+                Some(s) => (s, Default::default()),
                 None => {
-                    let kd = gm.base_color.unwrap_or(Vec3::ONE);
-                    loaded.scene.shaders.push(Shader::Phong(Phong {
-                        textures: Default::default(),
-                        ambient: Vec3::ZERO,
-                        diffuse: kd,
-                        specular: Vec3::ZERO,
-                        shininess: 1.0,
-                    }));
-                    loaded.scene.shaders.len() - 1
+                    let mut phong = gm.phong;
+                    moved(&mut phong.textures.ambient);
+                    moved(&mut phong.textures.diffuse);
+                    moved(&mut phong.textures.specular);
+                    let mut maps = gm.maps;
+                    if let Some((t, _)) = &mut maps.normal {
+                        t.texture += offset;
+                    }
+                    moved(&mut maps.emission_texture);
+                    moved(&mut maps.opacity_texture);
+                    loaded.scene.shaders.push(Shader::Phong(phong));
+                    (loaded.scene.shaders.len() - 1, maps)
                 }
             };
             let mut mesh = gm.mesh;
@@ -1176,8 +1192,16 @@ impl Reader<'_> {
                     *n = (normal_m * *n).normalize_or_zero();
                 }
             }
+            if let Some(ts) = &mut mesh.tangents {
+                // Tangents lie in the surface: they move with it; w (the
+                // bitangent's sign) stays.
+                for t in ts.iter_mut() {
+                    let d = (linear * t.truncate()).normalize_or_zero();
+                    *t = d.extend(t.w);
+                }
+            }
             loaded.scene.objects.push(Object {
-                maps: Default::default(),
+                maps,
                 shape: Shape::Mesh(mesh),
                 shader,
             });

@@ -513,3 +513,34 @@ fn the_example_scene_loads_with_its_textures() {
         .iter()
         .any(|sh| matches!(sh, Shader::Phong(p) if p.textures.diffuse.is_some())));
 }
+
+#[test]
+fn a_mesh_without_a_shader_keeps_its_gltf_textures_after_the_scenes_own() {
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/BoxTextured/BoxTextured.gltf");
+    let mut v = floor_with(json!({"texture": "w.png"}));
+    v["objects"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"type": "mesh", "file": gltf, "transform": {"translate": [0, 2, 0]}}));
+    let (_d, _p, loaded) = load(&v, &[("w.png", &png())]);
+    let s = &loaded.scene;
+    assert_eq!(s.textures.len(), 2, "w.png, then the box's image");
+    assert_eq!((s.textures[0].width, s.textures[0].height), (3, 2));
+    let box_object = s.objects.last().unwrap();
+    let p = phong(&s.shaders[box_object.shader]);
+    let t = p.textures.diffuse.expect("the box's base colour texture");
+    assert_eq!(t.texture, 1, "moved past the scene's own texture");
+    assert_eq!(s.textures[1].width, 211);
+    // With a shader of the scene, the material (and its image) is not used.
+    let mut v = floor_with(json!({"texture": "w.png"}));
+    v["objects"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"type": "mesh", "file": gltf, "shader": "floor"}));
+    let (_d, _p, loaded) = load(&v, &[("w.png", &png())]);
+    assert_eq!(loaded.scene.textures.len(), 1);
+    let last = loaded.scene.objects.last().unwrap();
+    assert_eq!(last.shader, 1);
+    assert!(last.maps.is_none());
+}
