@@ -99,6 +99,8 @@ const FLAG_LAST_CHUNK: u32 = 4u;
 // (attributes.wgsl); it adds the objects' emission (surface_maps.wgsl).
 const FLAG_ATTRIBUTES: u32 = 8u;
 const FLAG_EMISSION: u32 = 16u;
+// The shade stage reads triangles' vertex colours (some mesh has them).
+const FLAG_COLOURS: u32 = 32u;
 
 // Farther than anything in a scene; used as "no hit yet" and as the length
 // of shadow rays towards directional lights.

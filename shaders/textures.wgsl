@@ -1,5 +1,6 @@
 // Texture sampling, exactly as src/scene/texture.rs defines it: RGBA8
-// texels, sRGB decoded before filtering, host-built mip chains, nearest or
+// texels, sRGB decoded before filtering (by the host, which stores each
+// texel as linear RGBA16), host-built mip chains, nearest or
 // bilinear within a level, nearest or linear between levels, the three wrap
 // modes and KHR_texture_transform. Filtering is done here, on texel loads,
 // rather than by Vulkan samplers: the f64 reference then implements the same
@@ -9,13 +10,14 @@
 // with users' shader files (stages/shade.wgsl).
 //
 // All textures of a scene share one texel image (binding 20): each texture's
-// levels one after the other, four RGBA8 texels packed in each rgba32uint
-// texel (render::layout::textures). A texture use (binding 21) is a texture
+// levels one after the other, two linear RGBA16 texels packed in each
+// rgba32uint texel (render::layout::textures::texture_words). A texture use (binding 21) is a texture
 // with its sampler, texture coordinates and transform:
 //   0: level-0 width, height, level count, flags (TEXTURE_* below)
 //   1: first row of the uv transform, the level-of-detail bias
 //      (½·log2(w·h) + log2 of the transform's scale)
-//   2: second row of the uv transform, the first packed texel word of level 0
+//   2: second row of the uv transform, the first word of level 0 (two words
+//      a texel)
 
 @group(0) @binding(20) var penumbra_texture_texels: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(21) var penumbra_texture_uses: texture_storage_2d<rgba32uint, read>;
@@ -67,11 +69,6 @@ fn penumbra_texture_set(t: u32) -> u32 {
     return select(0u, 1u, (flags & penumbra_TEXTURE_SET_1) != 0u);
 }
 
-// sRGB's decoding curve (IEC 61966-2-1).
-fn penumbra_srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    return select(c / 12.92, pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c > vec3<f32>(0.04045));
-}
-
 // Texel index `i` wrapped into 0..n by `mode` (scene::Wrap::apply).
 fn penumbra_wrap(i: i32, n: i32, mode: u32) -> i32 {
     if mode == 0u {
@@ -84,18 +81,15 @@ fn penumbra_wrap(i: i32, n: i32, mode: u32) -> i32 {
     return clamp(i, 0, n - 1);
 }
 
-// Texel (x, y) of the level that starts at packed word `base` and is `size`
+// Texel (x, y) of the level that starts at word `base` and is `size`
 // texels, wrapped, as linear RGBA.
 fn penumbra_fetch(u: penumbra_TextureUse, base: u32, size: vec2<u32>, x: i32, y: i32) -> vec4<f32> {
     let xi = penumbra_wrap(x, i32(size.x), (u.flags >> penumbra_TEXTURE_WRAP_U_SHIFT) & 3u);
     let yi = penumbra_wrap(y, i32(size.y), (u.flags >> penumbra_TEXTURE_WRAP_V_SHIFT) & 3u);
-    let word = base + u32(yi) * size.x + u32(xi);
+    let word = base + 2u * (u32(yi) * size.x + u32(xi));
     let packed = textureLoad(penumbra_texture_texels, penumbra_texture_texel(word >> 2u));
-    var c = unpack4x8unorm(packed[word & 3u]);
-    if (u.flags & penumbra_TEXTURE_SRGB) != 0u {
-        c = vec4<f32>(penumbra_srgb_to_linear(c.rgb), c.a);
-    }
-    return c;
+    let pair = select(packed.zw, packed.xy, (word & 2u) == 0u);
+    return vec4<f32>(unpack2x16unorm(pair.x), unpack2x16unorm(pair.y));
 }
 
 // Level `level` of use `u` at transformed coordinates `st`: the texel that
@@ -104,7 +98,7 @@ fn penumbra_sample_level(u: penumbra_TextureUse, level: u32, st: vec2<f32>, line
     var base = u.base;
     var size = u.size;
     for (var k = 0u; k < level; k++) {
-        base += size.x * size.y;
+        base += 2u * size.x * size.y;
         size = max(size >> vec2<u32>(1u), vec2<u32>(1u));
     }
     let p = st * vec2<f32>(size);

@@ -200,7 +200,8 @@ impl Texture {
         levels
     }
 
-    /// Bytes of the texture with its whole mip chain on the device.
+    /// Bytes of the texture with its whole mip chain on the device (8 a
+    /// texel: the GPU stores linear RGBA16, `render::layout::textures`).
     pub fn device_bytes(&self) -> u64 {
         let (mut w, mut h, mut n) = (u64::from(self.width), u64::from(self.height), 0);
         loop {
@@ -210,7 +211,7 @@ impl Texture {
             }
             (w, h) = ((w / 2).max(1), (h / 2).max(1));
         }
-        n * 4
+        n * 8
     }
 }
 
@@ -468,7 +469,7 @@ mod tests {
         assert_eq!(chain.len(), 2);
         assert_eq!((chain[1].width, chain[1].height), (1, 1));
         assert_eq!(chain[1].texels[0], [188, 188, 188, 128]);
-        assert_eq!(t.device_bytes(), 12);
+        assert_eq!(t.device_bytes(), 24);
         // 5×3 → 2×1 → 1×1.
         let odd = Texture {
             width: 5,

@@ -687,9 +687,9 @@ fn textures_beyond_the_device_limit_name_the_texture() {
     s.objects[0].maps.emission_texture = Some(TextureRef::new(1));
     s.validate().unwrap();
     let mut r = support::renderer();
-    // Each 4×4 texture takes 16 + 4 + 1 texels of 4 bytes: 84 bytes, 96 as
-    // whole 16-byte texels; the cap fits the first only.
-    r.set_texture_capacity(100);
+    // Each 4×4 texture takes 16 + 4 + 1 texels of 8 bytes: 168 bytes, 176
+    // as whole 16-byte texels; the cap fits the first only.
+    r.set_texture_capacity(200);
     let err = r.upload(&s).map(|_| ()).unwrap_err().to_string();
     r.set_texture_capacity(u64::MAX);
     let fits = r.upload(&s).map(|_| ());

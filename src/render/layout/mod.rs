@@ -89,9 +89,12 @@ pub const FLAG_LAST_CHUNK: u32 = 4;
 pub const FLAG_ATTRIBUTES: u32 = 8;
 /// `PushConstants::flags` bit: the shade stage adds the objects' emission.
 pub const FLAG_EMISSION: u32 = 16;
+/// `PushConstants::flags` bit: the shade stage reads vertex colours (some
+/// mesh has them; the others' are (1, 1, 1, 1) anyway).
+pub const FLAG_COLOURS: u32 = 32;
 
-/// The flags of every dispatch of `scene`'s frames: [`FLAG_ATTRIBUTES`]
-/// and [`FLAG_EMISSION`] where it needs them.
+/// The flags of every dispatch of `scene`'s frames: [`FLAG_ATTRIBUTES`],
+/// [`FLAG_EMISSION`] and [`FLAG_COLOURS`] where it needs them.
 pub fn shade_flags(scene: &Scene) -> u32 {
     let mut flags = 0;
     if scene.features().attributes {
@@ -103,6 +106,12 @@ pub fn shade_flags(scene: &Scene) -> u32 {
         .any(|o| o.maps.emission != Vec3::ZERO || o.maps.emission_texture.is_some())
     {
         flags |= FLAG_EMISSION;
+    }
+    if scene.objects.iter().any(|o| match &o.shape {
+        crate::scene::Shape::Mesh(m) => m.colours.is_some(),
+        _ => false,
+    }) {
+        flags |= FLAG_COLOURS;
     }
     flags
 }
@@ -380,6 +389,7 @@ mod tests {
             "FLAG_LAST_CHUNK",
             "FLAG_ATTRIBUTES",
             "FLAG_EMISSION",
+            "FLAG_COLOURS",
             "KIND_TRIANGLE",
             "KIND_NONE",
             "RECORD_TEXELS",
@@ -414,6 +424,7 @@ mod tests {
             ("FLAG_LAST_CHUNK", FLAG_LAST_CHUNK),
             ("FLAG_ATTRIBUTES", FLAG_ATTRIBUTES),
             ("FLAG_EMISSION", FLAG_EMISSION),
+            ("FLAG_COLOURS", FLAG_COLOURS),
             ("penumbra_NO_TEXTURE", textures::NO_TEXTURE),
             ("penumbra_USE_TEXELS", textures::USE_TEXELS as u32),
             (

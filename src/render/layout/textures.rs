@@ -1,6 +1,6 @@
 //! Textures as the kernel sees them (`shaders/textures.wgsl`,
 //! `shaders/surface_maps.wgsl`, `shaders/attributes.wgsl`): every texture's
-//! mip chain packed into one texel image, the table of texture uses, each
+//! mip chain packed into one texel image (linear RGBA16, two texels a texel), the table of texture uses, each
 //! object's surface maps, and each triangle's vertex attributes.
 
 use glam::{DVec3, Vec4};
@@ -42,7 +42,7 @@ pub const ALPHA_BLEND: u32 = 2;
 /// A scene's textures laid out for the GPU.
 #[derive(Clone, Debug, Default)]
 pub struct GpuTextures {
-    /// Every texture's mip chain, RGBA8 texels packed four to a texel.
+    /// Every texture's mip chain, linear RGBA16 texels packed two to a texel.
     pub texels: Vec<[u32; 4]>,
     /// The texture uses ([`Scene::texture_uses`] order), [`USE_TEXELS`] each.
     pub uses: Vec<[u32; 4]>,
@@ -75,14 +75,29 @@ pub struct TextureChain {
     pub srgb: bool,
 }
 
-/// `t`'s mip chain as packed words (one RGBA8 texel each, level after
-/// level), and its level count.
+/// `t`'s mip chain as packed words, level after level: each texel as
+/// linear RGBA in four unorm16 values (two words: `r | g << 16`,
+/// `b | a << 16`), sRGB decoded here on the host from the chain's 8-bit
+/// texels. The shaders then filter without a `pow` per texel (the decode
+/// cost a textured frame about a sixth of its time on lavapipe:
+/// docs/textures.md), and the 16-bit rounding (at most 7.7e-6) is far below
+/// what 8 bits resolve.
 pub fn texture_words(t: &crate::scene::Texture) -> (Vec<u32>, u32) {
     let chain = t.mip_chain();
-    let words = chain
-        .iter()
-        .flat_map(|level| level.texels.iter().map(|p| u32::from_le_bytes(*p)))
-        .collect();
+    let lut: [u32; 256] = std::array::from_fn(|b| {
+        if t.srgb {
+            (crate::scene::texture::srgb_to_linear(b as u8) * 65535.0).round() as u32
+        } else {
+            b as u32 * 257
+        }
+    });
+    let mut words = Vec::new();
+    for level in &chain {
+        for p in &level.texels {
+            words.push(lut[p[0] as usize] | lut[p[1] as usize] << 16);
+            words.push(lut[p[2] as usize] | (u32::from(p[3]) * 257) << 16);
+        }
+    }
     (words, chain.len() as u32)
 }
 
