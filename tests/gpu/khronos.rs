@@ -30,7 +30,10 @@ fn box_textured_renders_its_texture() {
     let loaded = loaders::load_scene(&path, &opts).unwrap_or_else(|e| panic!("{e}"));
     let scene = loaded.scene;
     assert_eq!(scene.textures.len(), 1);
-    assert_eq!((scene.textures[0].width, scene.textures[0].height), (211, 211));
+    assert_eq!(
+        (scene.textures[0].width, scene.textures[0].height),
+        (211, 211)
+    );
     assert!(scene.textures[0].srgb);
     let Shader::Phong(p) = &scene.shaders[scene.objects[0].shader] else {
         panic!("glTF materials are Phong");
@@ -64,5 +67,9 @@ fn box_textured_renders_its_texture() {
         .filter(|p| p[3] > 0.0)
         .map(|p| std::array::from_fn(|c| (p[c].clamp(0.0, 1.0) * 255.0) as u8))
         .collect();
-    assert!(colours.len() > 50, "only {} distinct colours", colours.len());
+    assert!(
+        colours.len() > 50,
+        "only {} distinct colours",
+        colours.len()
+    );
 }

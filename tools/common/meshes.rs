@@ -206,7 +206,11 @@ fn pattern(side: u32, cells: u32, a: [u8; 3], b: [u8; 3], stripes: bool, label: 
     let texels = (0..side * side)
         .map(|i| {
             let (x, y) = (i % side, i / side);
-            let c = if (x / cell + y / cell) % 2 == 0 { a } else { b };
+            let c = if (x / cell + y / cell).is_multiple_of(2) {
+                a
+            } else {
+                b
+            };
             let grid = x % cell == 0 || y % cell == 0;
             let rgb = if grid { c.map(|v| v / 3) } else { c };
             let alpha = if stripes && (y / (cell / 2).max(1)) % 2 == 1 {
