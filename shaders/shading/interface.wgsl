@@ -61,11 +61,22 @@ struct LightSample {
 // by the shade stage for each point).
 var<private> penumbra_lod: vec2<f32>;
 
+// Whether the scene samples any texture: the host resolves it per scene, so
+// a shade pipeline of a scene without textures has no sampling code (it
+// returns (1, 1, 1, 1), which is what no texture gives).
+override penumbra_HAS_TEXTURES: bool = true;
+
 fn texture_sample(t: u32, uv: vec2<f32>) -> vec4<f32> {
+    if !penumbra_HAS_TEXTURES {
+        return vec4<f32>(1.0);
+    }
     return penumbra_texture_lod(t, uv, penumbra_lod[penumbra_texture_set(t)]);
 }
 
 fn texture_at(t: u32, s: Surface) -> vec4<f32> {
+    if !penumbra_HAS_TEXTURES {
+        return vec4<f32>(1.0);
+    }
     let uv_set = penumbra_texture_set(t);
     return penumbra_texture_lod(t, select(s.uv, s.uv1, uv_set == 1u), penumbra_lod[uv_set]);
 }

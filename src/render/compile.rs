@@ -367,6 +367,13 @@ impl Assembled {
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
+        // The shade stage's one override (shaders/shading/interface.wgsl):
+        // texture sampling, for scenes that sample textures.
+        let textures = key.features.textures || !kernel.specialise;
+        constants.insert(
+            "penumbra_HAS_TEXTURES".into(),
+            if textures { 1.0 } else { 0.0 },
+        );
         // Each stage declares only the overrides its files use; naga refuses
         // values for any other.
         constants.retain(|name, _| {

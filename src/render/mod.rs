@@ -288,7 +288,9 @@ const KEPT_STAGE_BUFFERS: usize = 2;
 pub struct Renderer {
     // Field order matters: pipelines and buffers must drop before the context.
     stage_pipelines: HashMap<(Stage, StageKernel), Cached>,
-    shade_pipelines: HashMap<ProgramFile, Cached>,
+    /// Per shader file and whether the scene samples textures (the shade
+    /// stage compiles texture sampling in only then).
+    shade_pipelines: HashMap<(ProgramFile, bool), Cached>,
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
     traversal_generation: u64,
@@ -521,7 +523,11 @@ impl Renderer {
 
     /// Compiles the shade pipeline of `program` unless the cache holds one
     /// compiled from the same text.
-    fn shade_pipeline(&mut self, program: &shade::Program) -> Result<Compiled, RenderError> {
+    fn shade_pipeline(
+        &mut self,
+        program: &shade::Program,
+        textures: bool,
+    ) -> Result<Compiled, RenderError> {
         let t0 = Instant::now();
         let source = shade::assemble(&self.shaders, &program.file, &program.text)?;
         if source.fields != program.fields {
@@ -531,20 +537,28 @@ impl Renderer {
             }));
         }
         let hash = text_hash(&[&source.assembled.text]);
+        let cache_key = (program.file.clone(), textures);
         if self
             .shade_pipelines
-            .get(&program.file)
+            .get(&cache_key)
             .is_some_and(|c| c.hash == hash)
         {
             return Ok(Compiled::default());
         }
+        let key = StageKernel {
+            features: Features {
+                textures,
+                ..Features::default()
+            },
+            ..StageKernel::default()
+        };
         let spirv = source
             .assembled
-            .compile_entry(&StageKernel::default(), shade::SHADE_ENTRY_POINT)?;
+            .compile_entry(&key, shade::SHADE_ENTRY_POINT)?;
         let naga = t0.elapsed();
         let (pipeline, creation, driver) = self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT)?;
         self.shade_pipelines.insert(
-            program.file.clone(),
+            cache_key,
             Cached {
                 pipeline,
                 hash,
@@ -575,12 +589,13 @@ impl Renderer {
             // A user file is compiled from the text the scene loaded (two
             // uploads of one path may differ); built-ins are re-read on a
             // reload only.
+            let textures = scene.features.textures;
             let current = self
                 .shade_pipelines
-                .get(&program.file)
+                .get(&(program.file.clone(), textures))
                 .is_some_and(|c| c.file_hash == text_hash(&[&program.text]));
             if reload || !current {
-                done.add(self.shade_pipeline(program)?);
+                done.add(self.shade_pipeline(program, textures)?);
             }
         }
         Ok(done)
@@ -1099,7 +1114,7 @@ impl Renderer {
             .materials
             .programs
             .iter()
-            .map(|p| &self.shade_pipelines[&p.file].pipeline)
+            .map(|p| &self.shade_pipelines[&(p.file.clone(), scene.features.textures)].pipeline)
             .collect();
         let read_counters = || -> Result<[u32; 2], RenderError> {
             let bytes = ctx.read_buffer(scene.bound[Binding::Counters as usize].buffer()?)?;
