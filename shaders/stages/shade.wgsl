@@ -57,8 +57,11 @@ const penumbra_FLAG_LAST_CHUNK: u32 = 4u;
 // FLAG_ATTRIBUTES and FLAG_EMISSION.
 const penumbra_FLAG_ATTRIBUTES: u32 = 8u;
 const penumbra_FLAG_EMISSION: u32 = 16u;
-// Some mesh has vertex colours (render.wgsl's FLAG_COLOURS).
+// Some mesh has vertex colours (render.wgsl's FLAG_COLOURS), and the
+// same resolved per scene by the host, so that without them the colour is a
+// constant the compiler folds into the shader's arithmetic.
 const penumbra_FLAG_COLOURS: u32 = 32u;
+override penumbra_HAS_COLOURS: bool = true;
 const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
@@ -108,7 +111,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             let uvs = penumbra_triangle_uvs(t1.w);
             uv = penumbra_triangle_uv(uvs, 0u, bary);
             uv1 = penumbra_triangle_uv(uvs, 1u, bary);
-            if (push.flags & penumbra_FLAG_COLOURS) != 0u {
+            if penumbra_HAS_COLOURS && (push.flags & penumbra_FLAG_COLOURS) != 0u {
                 vertex_colour = penumbra_triangle_colour(t1.w, bary);
             }
         }

@@ -374,6 +374,13 @@ impl Assembled {
             "penumbra_HAS_TEXTURES".into(),
             if textures { 1.0 } else { 0.0 },
         );
+        // And vertex colours: without them a point's colour is the constant
+        // (1, 1, 1, 1), so a built-in's prepare() folds away.
+        let colours = key.features.vertex_colours || !kernel.specialise;
+        constants.insert(
+            "penumbra_HAS_COLOURS".into(),
+            if colours { 1.0 } else { 0.0 },
+        );
         // Each stage declares only the overrides its files use; naga refuses
         // values for any other.
         constants.retain(|name, _| {
@@ -680,6 +687,7 @@ mod tests {
             area_lights: true,
             textures: true,
             attributes: true,
+            vertex_colours: true,
             normal_maps: true,
             alpha_tests: true,
         };

@@ -288,9 +288,9 @@ const KEPT_STAGE_BUFFERS: usize = 2;
 pub struct Renderer {
     // Field order matters: pipelines and buffers must drop before the context.
     stage_pipelines: HashMap<(Stage, StageKernel), Cached>,
-    /// Per shader file and whether the scene samples textures (the shade
-    /// stage compiles texture sampling in only then).
-    shade_pipelines: HashMap<(ProgramFile, bool), Cached>,
+    /// Per shader file and whether the scene samples textures and has
+    /// vertex colours (the shade stage compiles them in only then).
+    shade_pipelines: HashMap<(ProgramFile, (bool, bool)), Cached>,
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
     traversal_generation: u64,
@@ -526,7 +526,7 @@ impl Renderer {
     fn shade_pipeline(
         &mut self,
         program: &shade::Program,
-        textures: bool,
+        (textures, vertex_colours): (bool, bool),
     ) -> Result<Compiled, RenderError> {
         let t0 = Instant::now();
         let source = shade::assemble(&self.shaders, &program.file, &program.text)?;
@@ -537,7 +537,7 @@ impl Renderer {
             }));
         }
         let hash = text_hash(&[&source.assembled.text]);
-        let cache_key = (program.file.clone(), textures);
+        let cache_key = (program.file.clone(), (textures, vertex_colours));
         if self
             .shade_pipelines
             .get(&cache_key)
@@ -548,6 +548,7 @@ impl Renderer {
         let key = StageKernel {
             features: Features {
                 textures,
+                vertex_colours,
                 ..Features::default()
             },
             ..StageKernel::default()
@@ -589,7 +590,7 @@ impl Renderer {
             // A user file is compiled from the text the scene loaded (two
             // uploads of one path may differ); built-ins are re-read on a
             // reload only.
-            let textures = scene.features.textures;
+            let textures = (scene.features.textures, scene.features.vertex_colours);
             let current = self
                 .shade_pipelines
                 .get(&(program.file.clone(), textures))
@@ -1114,7 +1115,10 @@ impl Renderer {
             .materials
             .programs
             .iter()
-            .map(|p| &self.shade_pipelines[&(p.file.clone(), scene.features.textures)].pipeline)
+            .map(|p| {
+                let variant = (scene.features.textures, scene.features.vertex_colours);
+                &self.shade_pipelines[&(p.file.clone(), variant)].pipeline
+            })
             .collect();
         let read_counters = || -> Result<[u32; 2], RenderError> {
             let bytes = ctx.read_buffer(scene.bound[Binding::Counters as usize].buffer()?)?;

@@ -100,6 +100,8 @@ pub struct Features {
     /// Triangles have vertex attributes (texture coordinates, colours,
     /// tangents), or something samples a texture.
     pub attributes: bool,
+    /// Some mesh has vertex colours.
+    pub vertex_colours: bool,
     /// Some object has a normal map.
     pub normal_maps: bool,
     /// Some object is masked or blended: traversal tests alpha.
@@ -145,6 +147,10 @@ impl Scene {
                 Shape::Mesh(m) => !m.uvs.is_empty() || m.colours.is_some() || m.tangents.is_some(),
                 _ => false,
             });
+        f.vertex_colours = self.objects.iter().any(|o| match &o.shape {
+            Shape::Mesh(m) => m.colours.is_some(),
+            _ => false,
+        });
         f.normal_maps = self.objects.iter().any(|o| o.maps.normal.is_some());
         f.alpha_tests = self
             .objects
