@@ -9,6 +9,11 @@
 //! sampling, tests/gpu/reference.rs's rule: 99.5 % of pixels within 2e-3),
 //! and its lit faces show the logo's colours, many distinct ones, where an
 //! untextured cube would show one flat colour per face.
+//!
+//! TextureCoordinateTest shows each labelled corner of its texture on the
+//! quad named after it, upright: the test checks the render against its own
+//! decoding of the PNG at the uv the model's README prescribes, and against
+//! the same corner flipped (see the test's docs).
 
 use crate::support;
 
@@ -72,4 +77,237 @@ fn box_textured_renders_its_texture() {
         "only {} distinct colours",
         colours.len()
     );
+}
+
+/// One quad of TextureCoordinateTest as the model's README and accessor names
+/// describe it, seen from −z (the side its quads face): the quad covers
+/// `x ∈ [x0, x0 + 1]`, `y ∈ [y0, y0 + 1]` and shows the texture's corner
+/// `[u0, u0 + 0.4] × [v0, v0 + 0.4]` upright, with uv (0, 0) at the image's
+/// top-left as glTF defines it. Seen from −z, +x is on the left, so the
+/// quad's top-left corner (x0 + 1, y0 + 1) shows (u0, v0).
+struct TctQuad {
+    name: &'static str,
+    x0: f64,
+    y0: f64,
+    u0: f64,
+    v0: f64,
+    /// The colour channel that the material's baseColorFactor passes at 1.
+    channel: usize,
+}
+
+const TCT_QUADS: [TctQuad; 4] = [
+    TctQuad {
+        name: "TopLeft",
+        x0: 0.2,
+        y0: 0.2,
+        u0: 0.0,
+        v0: 0.0,
+        channel: 0,
+    },
+    TctQuad {
+        name: "TopRight",
+        x0: -1.2,
+        y0: 0.2,
+        u0: 0.6,
+        v0: 0.0,
+        channel: 0,
+    },
+    TctQuad {
+        name: "BottomLeft",
+        x0: 0.2,
+        y0: -1.2,
+        u0: 0.0,
+        v0: 0.6,
+        channel: 2,
+    },
+    TctQuad {
+        name: "BottomRight",
+        x0: -1.2,
+        y0: -1.2,
+        u0: 0.6,
+        v0: 0.6,
+        channel: 1,
+    },
+];
+
+/// Standard base64 (RFC 4648) with `=` padding: the test decodes the
+/// model's embedded PNG itself, apart from the loader.
+fn base64_decode(text: &str) -> Vec<u8> {
+    let value = |c: u8| -> u32 {
+        match c {
+            b'A'..=b'Z' => u32::from(c - b'A'),
+            b'a'..=b'z' => u32::from(c - b'a') + 26,
+            b'0'..=b'9' => u32::from(c - b'0') + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => panic!("not base64: {c}"),
+        }
+    };
+    let digits: Vec<u8> = text.bytes().filter(|&c| c != b'=').collect();
+    let mut out = Vec::with_capacity(digits.len() * 3 / 4);
+    for chunk in digits.chunks(4) {
+        let mut acc = 0u32;
+        for &c in chunk {
+            acc = (acc << 6) | value(c);
+        }
+        acc <<= 6 * (4 - chunk.len() as u32);
+        let bytes = acc.to_be_bytes();
+        out.extend_from_slice(&bytes[1..chunk.len()]);
+    }
+    out
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1).
+fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Fraction of the variance of `y` that the least-squares line `a + b·x`
+/// explains (the coefficient of determination R²), and the slope b.
+fn r_squared(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    let syy: f64 = y.iter().map(|b| (b - my) * (b - my)).sum();
+    (sxy * sxy / (sxx * syy), sxy / sxx)
+}
+
+/// TextureCoordinateTest (Khronos): four quads, each showing one labelled
+/// corner of a 512² texture ("Top Left", …, with checkered brackets and
+/// crosses), must show it upright: the glTF uv origin is the image's
+/// top-left. Each quad is rendered head-on through an orthographic camera
+/// framing uv `[u0 + 0.05, u0 + 0.35] × [v0 + 0.05, v0 + 0.35]` of its
+/// corner at 1.3 pixels per texel, under one directional light. The texture
+/// is magnified there, so the lookup is glTF's linear magFilter at mip
+/// level 0, and normal, light and view are constant over the quad: in the
+/// channel that the quad's baseColorFactor passes, a pixel is an affine
+/// function of the texture bilinearly interpolated at the pixel's uv. The
+/// test decodes the PNG itself and interpolates it (in linear colour, after
+/// sRGB decoding) at the uv that the README prescribes; the render must
+/// follow that, R² ≥ 0.99 (what 16-bit texels and f32 arithmetic leave),
+/// and must not follow the corner flipped in u, in v or in both (each R²
+/// below 0.5): a flipped or mirrored convention in the loader fails. Each
+/// render also agrees with the f64 reference like BoxTextured.
+#[test]
+fn texture_coordinate_test_is_upright() {
+    use glam::{DVec3, Vec3};
+    use penumbra::scene::{Camera, Light, LightKind, Projection};
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/TextureCoordinateTest/TextureCoordinateTest.gltf");
+    const SIZE: u32 = 200;
+    // Half the window: 0.15 of uv, 0.375 world units (a quad's 0.4 of uv spans 1).
+    const HALF: f64 = 0.375;
+    let opts = LoadOptions {
+        width: Some(SIZE),
+        height: Some(SIZE),
+        ..Default::default()
+    };
+    let mut scene = loaders::load_scene(&path, &opts)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scene;
+    assert_eq!(scene.textures.len(), 1);
+    scene.lights = vec![Light {
+        kind: LightKind::Directional {
+            direction: DVec3::new(0.2, 0.3, 1.0).normalize(),
+        },
+        intensity: 1.0,
+        ambient: Vec3::splat(0.05),
+        diffuse: Vec3::ONE,
+        specular: Vec3::ONE,
+    }];
+
+    // The texture, decoded here from the file's data URI, in linear colour.
+    let text = std::fs::read_to_string(&path).expect("read");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let uri = json["images"][0]["uri"].as_str().expect("image uri");
+    let png = base64_decode(uri.strip_prefix("data:image/png;base64,").expect("png uri"));
+    let tex = image::load_from_memory(&png).expect("png").to_rgba8();
+    assert_eq!(tex.dimensions(), (512, 512));
+    let linear: Vec<f64> = tex
+        .pixels()
+        .map(|p| srgb_to_linear(f64::from(p[0]) / 255.0))
+        .collect();
+    // Bilinear interpolation between texel centres, repeating (the sampler's wrap).
+    let bilinear = |u: f64, v: f64| -> f64 {
+        let (s, t) = (u * 512.0 - 0.5, v * 512.0 - 0.5);
+        let (i, j) = (s.floor(), t.floor());
+        let (fs, ft) = (s - i, t - j);
+        let at = |i: f64, j: f64| {
+            linear[(j.rem_euclid(512.0) as usize) * 512 + i.rem_euclid(512.0) as usize]
+        };
+        (1.0 - ft) * ((1.0 - fs) * at(i, j) + fs * at(i + 1.0, j))
+            + ft * ((1.0 - fs) * at(i, j + 1.0) + fs * at(i + 1.0, j + 1.0))
+    };
+
+    let kernel = support::renderer().kernel();
+    let sampling = penumbra::render::Sampling::default();
+    for q in &TCT_QUADS {
+        let centre = DVec3::new(q.x0 + 0.5, q.y0 + 0.5, 0.0);
+        let eye = centre - DVec3::new(0.0, 0.0, 5.0);
+        scene.camera = Camera {
+            position: eye,
+            orientation: Camera::look_at(eye, centre, DVec3::Y).expect("orientation"),
+            projection: Projection::Orthographic { half_height: HALF },
+            width: SIZE,
+            height: SIZE,
+        };
+        let gpu = support::render_with(&scene, kernel, sampling);
+        let reference = penumbra::reference::render(&scene, &sampling, &kernel);
+        let n = gpu.image.pixels.len();
+        let over = gpu
+            .image
+            .pixels
+            .iter()
+            .zip(&reference.image.pixels)
+            .filter(|(a, b)| (0..3).any(|c| (f64::from(a[c]) - f64::from(b[c])).abs() > 2e-3))
+            .count();
+        assert!(
+            over as f64 <= 0.005 * n as f64,
+            "{}: {over} of {n} pixels differ from the reference by more than 2e-3",
+            q.name
+        );
+
+        let (mut rendered, mut upright) = (Vec::new(), Vec::new());
+        let mut flipped: [Vec<f64>; 3] = Default::default();
+        for row in 0..SIZE {
+            for col in 0..SIZE {
+                // Seen from −z the camera's right is −x.
+                let x = centre.x + HALF - (f64::from(col) + 0.5) * 2.0 * HALF / f64::from(SIZE);
+                let y = centre.y + HALF - (f64::from(row) + 0.5) * 2.0 * HALF / f64::from(SIZE);
+                let du = (q.x0 + 1.0 - x) * 0.4;
+                let dv = (q.y0 + 1.0 - y) * 0.4;
+                rendered.push(f64::from(
+                    gpu.image.pixels[(row * SIZE + col) as usize][q.channel],
+                ));
+                upright.push(bilinear(q.u0 + du, q.v0 + dv));
+                flipped[0].push(bilinear(q.u0 + 0.4 - du, q.v0 + dv));
+                flipped[1].push(bilinear(q.u0 + du, q.v0 + 0.4 - dv));
+                flipped[2].push(bilinear(q.u0 + 0.4 - du, q.v0 + 0.4 - dv));
+            }
+        }
+        let (r2, slope) = r_squared(&upright, &rendered);
+        let wrong: Vec<f64> = flipped.iter().map(|f| r_squared(f, &rendered).0).collect();
+        eprintln!(
+            "{}: R² upright {r2:.4} (slope {slope:.3}), flipped in u, v, both {:.3?}",
+            q.name, wrong
+        );
+        assert!(
+            r2 >= 0.99 && slope > 0.0,
+            "{}: R² {r2:.4}, slope {slope:.3}",
+            q.name
+        );
+        for (which, w) in ["u", "v", "u and v"].iter().zip(&wrong) {
+            assert!(
+                *w < 0.5,
+                "{}: the corner flipped in {which} fits too: R² {w:.3}",
+                q.name
+            );
+        }
+    }
 }
