@@ -208,12 +208,13 @@ struct Textures {
     /// In the order first named: [`Scene::textures`].
     list: Vec<Texture>,
     /// By the file's canonical path (or its path as named, when it cannot be
-    /// resolved).
-    by_path: BTreeMap<PathBuf, TextureId>,
+    /// resolved) and whether it is decoded from sRGB: one file named with
+    /// both encodings is two textures.
+    by_path: BTreeMap<(PathBuf, bool), TextureId>,
 }
 
 /// The keys of a texture object (`{"texture": "wood.png", ...}`).
-const TEXTURE_KEYS: [&str; 4] = ["texture", "scale", "filter", "wrap"];
+const TEXTURE_KEYS: [&str; 5] = ["texture", "scale", "filter", "wrap", "encoding"];
 
 /// What a texture object may stand for, for the message when one is found
 /// elsewhere.
@@ -445,8 +446,11 @@ impl Reader<'_> {
     }
 
     /// A texture object at `at`: `{"texture": FILE}` with optional
-    /// `"scale"`, `"filter"` and `"wrap"`; the file is read relative to
-    /// `base` (once per file) and decoded as an sRGB colour texture.
+    /// `"scale"`, `"filter"`, `"wrap"` and `"encoding"`; the file is read
+    /// relative to `base` (once per file and encoding) and decoded as an
+    /// sRGB colour texture, or as linear values with `"encoding": "linear"`
+    /// (data such as roughness or heights; pbrt-v4's image textures name
+    /// the same choice `encoding`).
     fn texture_use(
         &self,
         at: &str,
@@ -461,7 +465,7 @@ impl Reader<'_> {
                 return Err(self.err(
                     format!("{at}.{key}"),
                     format!(
-                        "unknown field `{key}` of a texture, expected one of `texture`, `scale`, `filter`, `wrap`"
+                        "unknown field `{key}` of a texture, expected one of `texture`, `scale`, `filter`, `wrap`, `encoding`"
                     ),
                 ));
             }
@@ -482,8 +486,25 @@ impl Reader<'_> {
                 ))
             }
         };
-        let texture =
-            self.texture_file(&field("texture"), Path::new(file), base, guard, textures)?;
+        let srgb = match m.get("encoding") {
+            None => true,
+            Some(Value::String(e)) if e == "srgb" => true,
+            Some(Value::String(e)) if e == "linear" => false,
+            Some(other) => {
+                return Err(self.err(
+                    field("encoding"),
+                    format!("must be \"srgb\" or \"linear\", got {}", describe(other)),
+                ))
+            }
+        };
+        let texture = self.texture_file(
+            &field("texture"),
+            Path::new(file),
+            base,
+            guard,
+            textures,
+            srgb,
+        )?;
         let (mag, min, mip) = match m.get("filter") {
             None => (Filter::Linear, Filter::Linear, Some(Filter::Linear)),
             Some(Value::String(f)) => match f.as_str() {
@@ -584,8 +605,8 @@ impl Reader<'_> {
     }
 
     /// The texture file `rel` named at `field`, relative to `base`: its id
-    /// in `textures`, reading and decoding it (through the guard) the first
-    /// time it is named.
+    /// in `textures`, reading and decoding it (through the guard; `srgb`:
+    /// as a colour texture) the first time it is named with that encoding.
     fn texture_file(
         &self,
         field: &str,
@@ -593,16 +614,17 @@ impl Reader<'_> {
         base: &Path,
         guard: &super::guard::Guard,
         textures: &mut Textures,
+        srgb: bool,
     ) -> Result<TextureId, SceneError> {
         let path = base.join(rel);
-        let key = path.canonicalize().unwrap_or_else(|_| path.clone());
+        let key = (path.canonicalize().unwrap_or_else(|_| path.clone()), srgb);
         if let Some(&id) = textures.by_path.get(&key) {
             return Ok(id);
         }
         if !path.exists() {
             return Err(self.err(field, format!("no such file: {}", path.display())));
         }
-        let texture = read_texture(&path, true, guard).map_err(|e| self.err(field, e.0))?;
+        let texture = read_texture(&path, srgb, guard).map_err(|e| self.err(field, e.0))?;
         textures.list.push(texture);
         let id = textures.list.len() - 1;
         textures.by_path.insert(key, id);
@@ -1309,10 +1331,14 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
         wgsl_files,
         textures,
     } = r.shaders(&file.shaders, base, &guard)?;
-    let texture_files = textures.list.iter().filter_map(|t| t.file.clone());
     let mut files = vec![path.to_path_buf()];
     files.extend(wgsl_files);
-    files.extend(texture_files);
+    // A file named with both encodings is two textures but one file.
+    for f in textures.list.iter().filter_map(|t| t.file.clone()) {
+        if !files.contains(&f) {
+            files.push(f);
+        }
+    }
     let mut loaded = Loaded {
         scene: Scene {
             textures: textures.list,

@@ -282,6 +282,48 @@ fn a_u32_params_field_takes_a_texture() {
     assert!(loaded.scene.textures.is_empty());
 }
 
+#[test]
+fn encoding_linear_loads_the_values_as_they_are_and_is_its_own_texture() {
+    let shaders = json!({
+        "floor": {"type": "wgsl", "file": "painted.wgsl",
+                  "params": {"t": {"texture": "w.png", "encoding": "linear"}, "c": [1, 1, 1]}},
+        "ball": {"type": "phong", "diffuse": {"texture": "w.png", "encoding": "srgb"},
+                 "specular": {"texture": "w.png"}, "ambient": {"texture": "w.png", "encoding": "linear"}}
+    });
+    let (_d, _p, loaded) = load(
+        &scene(shaders),
+        &[("w.png", &png()), ("painted.wgsl", PAINTED.as_bytes())],
+    );
+    let s = &loaded.scene;
+    // The ball's diffuse and specular (sRGB) share one texture, its ambient
+    // (linear) is the other, and the floor's parameter shares that one.
+    assert_eq!(s.textures.len(), 2, "one file, two encodings");
+    let ball = phong(&s.shaders[0]);
+    let (srgb, linear) = (
+        ball.textures.diffuse.unwrap().texture,
+        ball.textures.ambient.unwrap().texture,
+    );
+    assert_ne!(srgb, linear);
+    assert!(s.textures[srgb].srgb && !s.textures[linear].srgb);
+    assert_eq!(ball.textures.specular.unwrap().texture, srgb);
+    let Shader::Wgsl(w) = &s.shaders[1] else {
+        panic!("floor is the wgsl shader")
+    };
+    let ParamValue::Texture(t) = w.values[0] else {
+        panic!("t is a texture: {:?}", w.values)
+    };
+    assert_eq!(t.texture, linear);
+    // The same texels either way; the flag says how the GPU decodes them.
+    assert_eq!(s.textures[0].texels, s.textures[1].texels);
+    // A watcher reads the file once for both.
+    let pngs = loaded
+        .files
+        .iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "png"))
+        .count();
+    assert_eq!(pngs, 1, "{:?}", loaded.files);
+}
+
 // ------------------------------------------------------------ bad input
 
 const FIELD: &str = "shaders.floor.diffuse";
@@ -332,7 +374,7 @@ fn corrupt_and_unsupported_files_name_the_file() {
 fn bad_sampler_values_name_their_field() {
     let f = [("w.png", png())];
     let files: Vec<(&str, &[u8])> = f.iter().map(|(n, b)| (*n, b.as_slice())).collect();
-    let cases: [(Value, String, &[&str]); 9] = [
+    let cases: [(Value, String, &[&str]); 11] = [
         (
             json!({"texture": "w.png", "filter": "linear"}),
             format!("{FIELD}.filter"),
@@ -372,6 +414,16 @@ fn bad_sampler_values_name_their_field() {
             json!({"filter": "nearest"}),
             FIELD.to_string(),
             &["missing field `texture`"],
+        ),
+        (
+            json!({"texture": "w.png", "encoding": "sRGB-ish"}),
+            format!("{FIELD}.encoding"),
+            &["\"srgb\" or \"linear\"", "sRGB-ish"],
+        ),
+        (
+            json!({"texture": "w.png", "encoding": false}),
+            format!("{FIELD}.encoding"),
+            &["\"srgb\" or \"linear\""],
         ),
         (
             json!({"texture": 3}),

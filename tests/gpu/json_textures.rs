@@ -168,6 +168,70 @@ fn a_textured_plane_from_above_and_a_user_shader_with_a_texture_match_the_conven
     );
 }
 
+/// The ground's shader for the linear test: its texture parameter's RGB.
+const RAW: &str = "struct Params { t: u32, }
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    return texture_at(p.t, s).rgb;
+}
+";
+
+/// `"encoding": "linear"` hands a shader the file's values undecoded: the
+/// ground seen from above, its user shader returning its texture parameter
+/// (nearest, level 0), shows texel `(⌊4u⌋ mod 4, ⌊4v⌋ mod 4)` at `u = x`,
+/// `v = z` as the 8-bit values over 255, where the sRGB default would give
+/// their decoded (darker) values.
+#[test]
+fn a_linear_texture_parameter_reads_the_files_values() {
+    let data = texels(4, 4, 5);
+    let json = format!(
+        r#"{{
+  "camera": {{ "position": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
+              "projection": "orthographic", "half_height": {HALF}, "width": {N}, "height": {N} }},
+  "shaders": {{
+    "ground": {{ "type": "wgsl", "file": "raw.wgsl",
+                "params": {{ "t": {{ "texture": "data.png", "filter": "nearest", "encoding": "linear" }} }} }}
+  }},
+  "objects": [ {{ "type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "ground" }} ],
+  "lights": [ {{ "type": "directional", "direction": [0, -1, 0] }} ]
+}}"#
+    );
+    let (dir, path) = support::write_scene(&json);
+    std::fs::write(dir.path().join("data.png"), png(&data)).unwrap();
+    std::fs::write(dir.path().join("raw.wgsl"), RAW).unwrap();
+    let scene = support::load(&path);
+    assert!(!scene.textures[0].srgb);
+    let frame = support::render(&scene);
+    let px = 2.0 * HALF / f64::from(N);
+    let mut checked = 0;
+    for py in 0..N {
+        for pxi in 0..N {
+            let x = (f64::from(pxi) + 0.5) * px - HALF;
+            let z = (f64::from(py) + 0.5) * px - HALF;
+            let (tx, tz) = (4.0 * x, 4.0 * z);
+            // A point on a texel edge may go either way in f32.
+            if (tx - tx.round()).abs() < 0.02 || (tz - tz.round()).abs() < 0.02 {
+                continue;
+            }
+            let t = data.get_pixel(
+                (tx.floor() as i64).rem_euclid(4) as u32,
+                (tz.floor() as i64).rem_euclid(4) as u32,
+            );
+            let got = frame.image.pixels[(py * N + pxi) as usize];
+            for c in 0..3 {
+                let want = f64::from(t[c]) / 255.0;
+                assert!(
+                    (f64::from(got[c]) - want).abs() <= TOL,
+                    "pixel ({pxi}, {py}) channel {c}: got {:?}, want texel {:?} / 255",
+                    &got[..3],
+                    t.0
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 2000, "{checked} pixels checked");
+}
+
 // ------------------------------------------------------------ watching
 
 /// The watch scene: the ground from above (orthographic, 4 units across,
