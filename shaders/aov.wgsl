@@ -28,7 +28,7 @@ fn write_aov(pixel: u32, hit: Hit) {
         let n = hit.geometric_normal;
         var uv = vec2<f32>(0.0);
         if hit.kind == KIND_TRIANGLE {
-            uv = vec2<f32>(hit.u, hit.v);
+            uv = hit.coords;
         }
         out = Aov(hit.t, n.x, n.y, n.z, uv.x, uv.y, hit.object, hit.index);
     }

@@ -8,9 +8,6 @@ struct Hit {
     // Which primitive: kind and index into that kind's buffer.
     kind: u32,
     index: u32,
-    // Barycentric coordinates of triangle hits.
-    u: f32,
-    v: f32,
     // Filled in by finish_hit for the nearest hit only.
     position: vec3<f32>,
     geometric_normal: vec3<f32>,
@@ -18,8 +15,9 @@ struct Hit {
     shader: u32,
     // Index of the scene object the primitive belongs to.
     object: u32,
-    // Triangles: the barycentrics (u, v) again; planes and spheres: their
-    // texture coordinates (surface.wgsl).
+    // Triangles: the barycentric coordinates (u, v) of the hit; planes and
+    // spheres: their texture coordinates (filled by surface.wgsl for the
+    // nearest hit).
     coords: vec2<f32>,
     // The geometric level of detail of texture coordinate sets 0 and 1
     // (scenes with textures only; surface.wgsl).
@@ -84,8 +82,7 @@ fn closest_triangle(i: u32, ray: Ray, hit: ptr<function, Hit>) {
         (*hit).t = h.x;
         (*hit).kind = KIND_TRIANGLE;
         (*hit).index = i;
-        (*hit).u = h.y;
-        (*hit).v = h.z;
+        (*hit).coords = h.yz;
     }
 }
 
@@ -113,7 +110,7 @@ fn finish_hit(ray: Ray, hit: ptr<function, Hit>) {
         default: {
             let tri = triangle((*hit).index);
             ng = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
-            ns = triangle_shading_normal(tri, ng, (*hit).u, (*hit).v);
+            ns = triangle_shading_normal(tri, ng, (*hit).coords.x, (*hit).coords.y);
             (*hit).shader = tri.shader;
             (*hit).object = tri.object;
         }

@@ -36,7 +36,8 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hit = closest_hit(make_ray(q.origin, q.dir));
     var out = QueryHit(-1.0, KIND_NONE, 0u, 0.0, 0.0, 0u, 0u, 0u);
     if hit.found {
-        out = QueryHit(hit.t, hit.kind, hit.index, hit.u, hit.v, 0u, 0u, 0u);
+        let bary = select(vec2<f32>(0.0), hit.coords, hit.kind == KIND_TRIANGLE);
+        out = QueryHit(hit.t, hit.kind, hit.index, bary.x, bary.y, 0u, 0u, 0u);
     }
     query_hits[i] = out;
 }

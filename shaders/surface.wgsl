@@ -63,7 +63,6 @@ fn surface_coords(ray: Ray, hit: ptr<function, Hit>, ng: vec3<f32>) {
             ratio = vec2<f32>(1.0 / (2.0 * PI * PI * sphere.radius * sphere.radius * sin_theta));
         }
         default: {
-            (*hit).coords = vec2<f32>((*hit).u, (*hit).v);
             if HAS_TEXTURES && HAS_ATTRIBUTES {
                 let tri = triangle((*hit).index);
                 let world = length(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));

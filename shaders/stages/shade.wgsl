@@ -57,11 +57,15 @@ const penumbra_FLAG_LAST_CHUNK: u32 = 4u;
 // FLAG_ATTRIBUTES and FLAG_EMISSION.
 const penumbra_FLAG_ATTRIBUTES: u32 = 8u;
 const penumbra_FLAG_EMISSION: u32 = 16u;
-// Some mesh has vertex colours (render.wgsl's FLAG_COLOURS), and the
-// same resolved per scene by the host, so that without them the colour is a
-// constant the compiler folds into the shader's arithmetic.
+// Some mesh has vertex colours (render.wgsl's FLAG_COLOURS).
 const penumbra_FLAG_COLOURS: u32 = 32u;
+// The same three resolved per scene by the host (scene::Features; true in
+// an unspecialised kernel, where the flags decide): a scene without them
+// compiles none of their code, and without colours the colour is a
+// constant the compiler folds into the shader's arithmetic.
+override penumbra_HAS_ATTRIBUTES: bool = true;
 override penumbra_HAS_COLOURS: bool = true;
+override penumbra_HAS_EMISSION: bool = true;
 const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
@@ -106,7 +110,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if t0.w == penumbra_KIND_TRIANGLE {
         uv = vec2<f32>(0.0);
         uv1 = uv;
-        if (push.flags & penumbra_FLAG_ATTRIBUTES) != 0u {
+        if penumbra_HAS_ATTRIBUTES && (push.flags & penumbra_FLAG_ATTRIBUTES) != 0u {
             let bary = bitcast<vec2<f32>>(t4.xy);
             let uvs = penumbra_triangle_uvs(t1.w);
             uv = penumbra_triangle_uv(uvs, 0u, bary);
@@ -124,7 +128,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     var colour: vec3<f32>;
     if push.sample_first == 0u {
         colour = penumbra_ambient_sum(s, p);
-        if (push.flags & penumbra_FLAG_EMISSION) != 0u {
+        if penumbra_HAS_EMISSION && (push.flags & penumbra_FLAG_EMISSION) != 0u {
             let m = penumbra_surface_map(t3.w, 0u);
             colour += penumbra_f3(m) * texture_at(m.w, s).rgb;
         }

@@ -367,20 +367,22 @@ impl Assembled {
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
-        // The shade stage's one override (shaders/shading/interface.wgsl):
-        // texture sampling, for scenes that sample textures.
-        let textures = key.features.textures || !kernel.specialise;
-        constants.insert(
-            "penumbra_HAS_TEXTURES".into(),
-            if textures { 1.0 } else { 0.0 },
-        );
-        // And vertex colours: without them a point's colour is the constant
-        // (1, 1, 1, 1), so a built-in's prepare() folds away.
-        let colours = key.features.vertex_colours || !kernel.specialise;
-        constants.insert(
-            "penumbra_HAS_COLOURS".into(),
-            if colours { 1.0 } else { 0.0 },
-        );
+        // The shade stage's overrides (shaders/shading/interface.wgsl,
+        // stages/shade.wgsl; the features of shade::variant): texture
+        // sampling, vertex attributes, vertex colours and emission, each
+        // compiled in only for scenes that have it. Without colours a
+        // point's colour is the constant (1, 1, 1, 1), so a built-in's
+        // prepare() folds away.
+        let f = key.features;
+        for (name, on) in [
+            ("penumbra_HAS_TEXTURES", f.textures),
+            ("penumbra_HAS_ATTRIBUTES", f.attributes),
+            ("penumbra_HAS_COLOURS", f.vertex_colours),
+            ("penumbra_HAS_EMISSION", f.emission),
+        ] {
+            let on = on || !kernel.specialise;
+            constants.insert(name.into(), if on { 1.0 } else { 0.0 });
+        }
         // Each stage declares only the overrides its files use; naga refuses
         // values for any other.
         constants.retain(|name, _| {
@@ -688,6 +690,7 @@ mod tests {
             textures: true,
             attributes: true,
             vertex_colours: true,
+            emission: true,
             normal_maps: true,
             alpha_tests: true,
         };

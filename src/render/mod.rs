@@ -288,9 +288,10 @@ const KEPT_STAGE_BUFFERS: usize = 2;
 pub struct Renderer {
     // Field order matters: pipelines and buffers must drop before the context.
     stage_pipelines: HashMap<(Stage, StageKernel), Cached>,
-    /// Per shader file and whether the scene samples textures and has
-    /// vertex colours (the shade stage compiles them in only then).
-    shade_pipelines: HashMap<(ProgramFile, (bool, bool)), Cached>,
+    /// Per shader file and the scene's [`shade::variant`] (the shade stage
+    /// compiles textures, attributes, colours and emission in only for
+    /// scenes that have them).
+    shade_pipelines: HashMap<(ProgramFile, Features), Cached>,
     stage_buffers: Vec<StageBuffers>,
     /// Bumped when a stage before shading is recompiled (stale hits).
     traversal_generation: u64,
@@ -526,7 +527,7 @@ impl Renderer {
     fn shade_pipeline(
         &mut self,
         program: &shade::Program,
-        (textures, vertex_colours): (bool, bool),
+        variant: Features,
     ) -> Result<Compiled, RenderError> {
         let t0 = Instant::now();
         let source = shade::assemble(&self.shaders, &program.file, &program.text)?;
@@ -537,7 +538,7 @@ impl Renderer {
             }));
         }
         let hash = text_hash(&[&source.assembled.text]);
-        let cache_key = (program.file.clone(), (textures, vertex_colours));
+        let cache_key = (program.file.clone(), variant);
         if self
             .shade_pipelines
             .get(&cache_key)
@@ -546,11 +547,7 @@ impl Renderer {
             return Ok(Compiled::default());
         }
         let key = StageKernel {
-            features: Features {
-                textures,
-                vertex_colours,
-                ..Features::default()
-            },
+            features: variant,
             ..StageKernel::default()
         };
         let spirv = source
@@ -590,13 +587,13 @@ impl Renderer {
             // A user file is compiled from the text the scene loaded (two
             // uploads of one path may differ); built-ins are re-read on a
             // reload only.
-            let textures = (scene.features.textures, scene.features.vertex_colours);
+            let variant = shade::variant(&scene.features);
             let current = self
                 .shade_pipelines
-                .get(&(program.file.clone(), textures))
+                .get(&(program.file.clone(), variant))
                 .is_some_and(|c| c.file_hash == text_hash(&[&program.text]));
             if reload || !current {
-                done.add(self.shade_pipeline(program, textures)?);
+                done.add(self.shade_pipeline(program, variant)?);
             }
         }
         Ok(done)
@@ -1116,7 +1113,7 @@ impl Renderer {
             .programs
             .iter()
             .map(|p| {
-                let variant = (scene.features.textures, scene.features.vertex_colours);
+                let variant = shade::variant(&scene.features);
                 &self.shade_pipelines[&(p.file.clone(), variant)].pipeline
             })
             .collect();

@@ -15,6 +15,7 @@ use std::path::PathBuf;
 use super::compile::{Assembled, CompileError, ShaderSource};
 use super::stages::SHADE_PRELUDE;
 use crate::scene::shading::wgsl::{reflect, ParamField, ParamType, ShaderFileError};
+use crate::scene::Features;
 
 /// How a reload's error starts when a user shader file's `struct Params`
 /// no longer matches the parameters uploaded with the scene (`penumbra
@@ -23,6 +24,20 @@ pub const PARAMS_CHANGED: &str = "its Params changed since the scene was loaded"
 
 /// The shade stage's entry point (`shaders/stages/shade.wgsl`).
 pub const SHADE_ENTRY_POINT: &str = "penumbra_shade_stage";
+
+/// The features that a shade pipeline is specialised to (its overrides,
+/// compile.rs), the rest cleared: the key under which a file's shade
+/// pipeline is cached beside the file, so that scenes differing only in
+/// what the shade stage does not see share it.
+pub fn variant(f: &Features) -> Features {
+    Features {
+        textures: f.textures,
+        attributes: f.attributes,
+        vertex_colours: f.vertex_colours,
+        emission: f.emission,
+        ..Features::default()
+    }
+}
 
 /// Where a shade program's file comes from.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]

@@ -102,6 +102,9 @@ pub struct Features {
     pub attributes: bool,
     /// Some mesh has vertex colours.
     pub vertex_colours: bool,
+    /// Some object emits (an emission colour or texture): the shade stage
+    /// adds it.
+    pub emission: bool,
     /// Some object has a normal map.
     pub normal_maps: bool,
     /// Some object is masked or blended: traversal tests alpha.
@@ -151,6 +154,10 @@ impl Scene {
             Shape::Mesh(m) => m.colours.is_some(),
             _ => false,
         });
+        f.emission = self
+            .objects
+            .iter()
+            .any(|o| o.maps.emission != glam::Vec3::ZERO || o.maps.emission_texture.is_some());
         f.normal_maps = self.objects.iter().any(|o| o.maps.normal.is_some());
         f.alpha_tests = self
             .objects

@@ -96,21 +96,15 @@ pub const FLAG_COLOURS: u32 = 32;
 /// The flags of every dispatch of `scene`'s frames: [`FLAG_ATTRIBUTES`],
 /// [`FLAG_EMISSION`] and [`FLAG_COLOURS`] where it needs them.
 pub fn shade_flags(scene: &Scene) -> u32 {
+    let f = scene.features();
     let mut flags = 0;
-    if scene.features().attributes {
+    if f.attributes {
         flags |= FLAG_ATTRIBUTES;
     }
-    if scene
-        .objects
-        .iter()
-        .any(|o| o.maps.emission != Vec3::ZERO || o.maps.emission_texture.is_some())
-    {
+    if f.emission {
         flags |= FLAG_EMISSION;
     }
-    if scene.objects.iter().any(|o| match &o.shape {
-        crate::scene::Shape::Mesh(m) => m.colours.is_some(),
-        _ => false,
-    }) {
+    if f.vertex_colours {
         flags |= FLAG_COLOURS;
     }
     flags
