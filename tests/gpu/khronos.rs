@@ -14,6 +14,10 @@
 //! quad named after it, upright: the test checks the render against its own
 //! decoding of the PNG at the uv the model's README prescribes, and against
 //! the same corner flipped (see the test's docs).
+//!
+//! TextureSettingsTest's wrap rows (repeat, mirrored repeat, clamp to edge,
+//! along S and T) show its green check marks and no red crosses, as its
+//! Sample quads do.
 
 use crate::support;
 
@@ -309,5 +313,110 @@ fn texture_coordinate_test_is_upright() {
                 q.name
             );
         }
+    }
+}
+
+/// TextureSettingsTest (Khronos): rows of two quads, a "Test" quad whose
+/// texture coordinates run outside [0, 1] under a sampler's wrap mode, and
+/// a "Sample pass" quad beside it that shows what it must look like. The
+/// textures are white with green check marks and red crosses placed so
+/// that a wrong wrap mode shows a cross (or solid red) where the right one
+/// shows a check mark (or solid green, the clamp rows). The model's README
+/// states the criterion: every Test quad looks like its Sample, green and
+/// never red. Each of the six wrap rows (mirror, repeat and clamp, along S
+/// and along T) is rendered head-on and its quads' pixels are classed as
+/// green or red by their linear colour; each Test quad must have no red
+/// pixel and as much green as its Sample (within a fifth), and neither may
+/// be blank. (The model's two doubleSided rows are not checked: penumbra's
+/// surfaces are two-sided.)
+#[test]
+fn texture_settings_test_wrap_rows_pass() {
+    use glam::{DVec3, Vec3};
+    use penumbra::scene::{Camera, Light, LightKind, Projection};
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/TextureSettingsTest/TextureSettingsTest.gltf");
+    // The rows, by their meshes' local z range: the root node maps local
+    // (x, y, z) to world (−x, z, y), so a row spans world y = local z, the
+    // Test quads world x ∈ [−0.9048, −0.0048] and the Samples world
+    // x ∈ [−3.0508, −2.1508], all at world z ≈ 0 facing −z.
+    let rows: [(&str, f64, f64); 6] = [
+        ("mirror T", -5.165, -4.265),
+        ("mirror S", -4.128, -3.228),
+        ("repeat T", -3.091, -2.191),
+        ("repeat S", -2.054, -1.154),
+        ("clamp T", -1.020, -0.120),
+        ("clamp S", 0.017, 0.917),
+    ];
+    const PX: f64 = 0.01; // world units a pixel
+    const W: u32 = 320;
+    const H: u32 = 100;
+    let opts = LoadOptions {
+        width: Some(W),
+        height: Some(H),
+        ..Default::default()
+    };
+    let mut scene = loaders::load_scene(&path, &opts)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scene;
+    assert_eq!(scene.textures.len(), 3);
+    scene.lights = vec![Light {
+        kind: LightKind::Directional {
+            direction: DVec3::new(0.1, 0.2, 1.0).normalize(),
+        },
+        intensity: 1.0,
+        ambient: Vec3::splat(0.2),
+        diffuse: Vec3::ONE,
+        specular: Vec3::ZERO,
+    }];
+    let cx = -1.5278;
+    for (name, y0, y1) in rows {
+        let cy = 0.5 * (y0 + y1);
+        let centre = DVec3::new(cx, cy, 0.0);
+        let eye = centre - DVec3::new(0.0, 0.0, 10.0);
+        scene.camera = Camera {
+            position: eye,
+            orientation: Camera::look_at(eye, centre, DVec3::Y).expect("orientation"),
+            projection: Projection::Orthographic {
+                half_height: 0.5 * PX * f64::from(H),
+            },
+            width: W,
+            height: H,
+        };
+        let frame = support::render(&scene);
+        // (pixels, green, red) inside quad x ∈ [x0, x1], 0.04 from its edges.
+        let count = |x0: f64, x1: f64| {
+            let (mut n, mut green, mut red) = (0, 0, 0);
+            for row in 0..H {
+                for col in 0..W {
+                    // Seen from −z the camera's right is −x.
+                    let x = cx + 0.5 * PX * f64::from(W) - (f64::from(col) + 0.5) * PX;
+                    let y = cy + 0.5 * PX * f64::from(H) - (f64::from(row) + 0.5) * PX;
+                    if x < x0 + 0.04 || x > x1 - 0.04 || y < y0 + 0.04 || y > y1 - 0.04 {
+                        continue;
+                    }
+                    let p = frame.image.pixels[(row * W + col) as usize];
+                    n += 1;
+                    if p[1] > 0.1 && p[1] > 3.0 * p[0] {
+                        green += 1;
+                    }
+                    if p[0] > 0.1 && p[0] > 3.0 * p[1] {
+                        red += 1;
+                    }
+                }
+            }
+            (n, green, red)
+        };
+        let (nt, gt, rt) = count(-0.9048, -0.0048);
+        let (ns, gs, rs) = count(-3.0508, -2.1508);
+        eprintln!("{name}: test {gt} green, {rt} red of {nt}; sample {gs} green, {rs} red of {ns}");
+        assert!(nt > 5000 && ns > 5000, "{name}: {nt} and {ns} pixels");
+        assert_eq!(rs, 0, "{name}: the Sample quad shows red");
+        assert!(gs > 100, "{name}: the Sample quad shows no green");
+        assert_eq!(rt, 0, "{name}: the Test quad shows {rt} red pixels");
+        assert!(
+            (gt as f64 - gs as f64).abs() <= 0.2 * gs as f64,
+            "{name}: the Test quad shows {gt} green pixels, its Sample {gs}"
+        );
     }
 }
