@@ -161,15 +161,6 @@ fn base64_decode(text: &str) -> Vec<u8> {
     out
 }
 
-/// The sRGB transfer function's inverse (IEC 61966-2-1).
-fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// Fraction of the variance of `y` that the least-squares line `a + b·x`
 /// explains (the coefficient of determination R²), and the slope b.
 fn r_squared(x: &[f64], y: &[f64]) -> (f64, f64) {
@@ -235,7 +226,7 @@ fn texture_coordinate_test_is_upright() {
     assert_eq!(tex.dimensions(), (512, 512));
     let linear: Vec<f64> = tex
         .pixels()
-        .map(|p| srgb_to_linear(f64::from(p[0]) / 255.0))
+        .map(|p| penumbra::scene::texture::srgb_to_linear(p[0]))
         .collect();
     // Bilinear interpolation between texel centres, repeating (the sampler's wrap).
     let bilinear = |u: f64, v: f64| -> f64 {
