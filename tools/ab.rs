@@ -42,6 +42,13 @@ struct Args {
     /// time, not this. For lavapipe on Linux only.
     #[arg(long)]
     cpu_time: bool,
+    /// Stage memory bound of side A in KiB (`Renderer::set_stage_memory`;
+    /// default: the renderer's), to compare tile sizes with one shader tree.
+    #[arg(long)]
+    a_stage_kib: Option<u64>,
+    /// Stage memory bound of side B in KiB.
+    #[arg(long)]
+    b_stage_kib: Option<u64>,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -54,12 +61,19 @@ fn main() -> anyhow::Result<()> {
         None => ShaderSource::Embedded,
     };
     let mut sides = Vec::new();
-    for (name, dir) in [("A", source(&args.a)), ("B", source(&Some(args.b.clone())))] {
+    let sides_in = [
+        ("A", source(&args.a), args.a_stage_kib),
+        ("B", source(&Some(args.b.clone())), args.b_stage_kib),
+    ];
+    for (name, dir, stage_kib) in sides_in {
         let mut r = Renderer::new(&RendererOptions {
             device: device.clone(),
             shaders: dir,
             ..Default::default()
         })?;
+        if let Some(kib) = stage_kib {
+            r.set_stage_memory(kib << 10);
+        }
         let up = r.upload(&scene)?;
         let (w, h) = up.size();
         let t0 = Instant::now();

@@ -330,6 +330,41 @@ impl Compiled {
     }
 }
 
+/// One dispatch of a frame: its slot in the stage times, the pipeline, its
+/// push constants and its workgroups.
+type StagePush<'a> = (usize, &'a ComputePipeline, PushConstants, [u32; 3]);
+
+/// Records `pushes` with the bindings `refs` in one submission and waits for
+/// it, or, when `profile` is set, submits and times each dispatch on its own
+/// (adding each to its slot of `stage_times`). Returns the time spent.
+fn submit(
+    ctx: &Context,
+    pushes: &[StagePush],
+    refs: &[Resource],
+    profile: bool,
+    stage_times: &mut [Duration],
+) -> Result<Duration, RenderError> {
+    let chain: Vec<Dispatch> = pushes
+        .iter()
+        .map(|(_, pipeline, push, groups)| Dispatch {
+            pipeline,
+            resources: refs,
+            push_constants: bytemuck::bytes_of(push),
+            groups: *groups,
+        })
+        .collect();
+    if !profile {
+        return Ok(ctx.dispatch_chain(&chain)?);
+    }
+    let mut total = Duration::ZERO;
+    for ((slot, ..), d) in pushes.iter().zip(&chain) {
+        let t = ctx.dispatch_chain(std::slice::from_ref(d))?;
+        stage_times[*slot] += t;
+        total += t;
+    }
+    Ok(total)
+}
+
 fn text_hash(parts: &[&str]) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
@@ -1142,14 +1177,30 @@ impl Renderer {
                 light_count,
                 ..Zeroable::zeroed()
             };
+            // Dispatches not yet submitted, all of one band of the image:
+            // without `cancel`, a pass's tiles go in one submission per band.
+            let mut pending: Vec<StagePush> = Vec::new();
+            let mut pending_band = 0;
             for &(origin, size) in &tiles {
                 let band = bands.band_of(origin[1]);
-                let refs = &band_refs[band];
+                if band != pending_band && !pending.is_empty() {
+                    render += submit(
+                        ctx,
+                        &pending,
+                        &band_refs[pending_band],
+                        self.profile_stages,
+                        &mut stage_times,
+                    )?;
+                    pending.clear();
+                }
+                pending_band = band;
                 let base = PushConstants {
                     slot_base: bands.rows[band].start * width,
                     ..base
                 };
-                // Bands of rows within the tile, to ask `cancel` between.
+                // Bands of rows within the tile, to ask `cancel` between
+                // submissions (without it, the pass's tiles of one image band
+                // go in one submission).
                 let band_rows = match cancel {
                     Some(_) => BAND_ROWS,
                     None => size[1],
@@ -1168,9 +1219,8 @@ impl Renderer {
                         tile_width: plan.tile[0],
                         ..base
                     };
-                    let mut pushes: Vec<(usize, &ComputePipeline, PushConstants)> = Vec::new();
                     if !reuse {
-                        pushes.push((0, stage(Stage::Hit), band));
+                        pending.push((0, stage(Stage::Hit), band, groups));
                     }
                     for (c, &(first, count)) in chunks.iter().enumerate() {
                         let last = match c + 1 == chunks.len() {
@@ -1184,39 +1234,36 @@ impl Renderer {
                             ..band
                         };
                         if !reuse {
-                            pushes.push((1, stage(Stage::Shadow), chunk));
+                            pending.push((1, stage(Stage::Shadow), chunk, groups));
                         }
                         for (i, p) in programs.iter().enumerate() {
-                            pushes.push((
-                                engine + i,
-                                p,
-                                PushConstants {
-                                    program: i as u32,
-                                    ..chunk
-                                },
-                            ));
+                            let push = PushConstants {
+                                program: i as u32,
+                                ..chunk
+                            };
+                            pending.push((engine + i, p, push, groups));
                         }
                     }
-                    let chain: Vec<Dispatch> = pushes
-                        .iter()
-                        .map(|(_, pipeline, push)| Dispatch {
-                            pipeline,
-                            resources: refs,
-                            push_constants: bytemuck::bytes_of(push),
-                            groups,
-                        })
-                        .collect();
-                    if self.profile_stages {
-                        // One submission per dispatch, timed on its own.
-                        for ((slot, _, _), d) in pushes.iter().zip(&chain) {
-                            let t = ctx.dispatch_chain(std::slice::from_ref(d))?;
-                            stage_times[*slot] += t;
-                            render += t;
-                        }
-                    } else {
-                        render += ctx.dispatch_chain(&chain)?;
+                    if cancel.is_some() {
+                        render += submit(
+                            ctx,
+                            &pending,
+                            &band_refs[pending_band],
+                            self.profile_stages,
+                            &mut stage_times,
+                        )?;
+                        pending.clear();
                     }
                 }
+            }
+            if !pending.is_empty() {
+                render += submit(
+                    ctx,
+                    &pending,
+                    &band_refs[pending_band],
+                    self.profile_stages,
+                    &mut stage_times,
+                )?;
             }
             let after = read_counters()?;
             primary_rays += after[0].wrapping_sub(before[0]) as u64;
