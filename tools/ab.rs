@@ -72,7 +72,7 @@ fn main() -> anyhow::Result<()> {
             ..Default::default()
         })?;
         if let Some(kib) = stage_kib {
-            r.set_stage_memory(kib << 10);
+            r.set_stage_memory(kib.saturating_mul(1024));
         }
         let up = r.upload(&scene)?;
         let (w, h) = up.size();
@@ -80,10 +80,12 @@ fn main() -> anyhow::Result<()> {
         // Compile (first frame), then one warm-up frame.
         r.render_uploaded(&up, w, h)
             .with_context(|| format!("shader tree {name}"))?;
-        r.render_uploaded(&up, w, h)?;
+        let warm = r.render_uploaded(&up, w, h)?;
         eprintln!(
-            "{name}: compiled and warmed up in {:.0} ms",
-            ms(t0.elapsed())
+            "{name}: compiled and warmed up in {:.0} ms; {} tiles of {:.2} MiB stage memory",
+            ms(t0.elapsed()),
+            warm.stats.tiles,
+            warm.stats.stage_bytes as f64 / 1048576.0
         );
         sides.push((r, up));
     }

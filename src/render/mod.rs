@@ -334,17 +334,18 @@ impl Compiled {
 /// push constants and its workgroups.
 type StagePush<'a> = (usize, &'a ComputePipeline, PushConstants, [u32; 3]);
 
-/// Records `pushes` with the bindings `refs` in one submission and waits for
-/// it, or, when `profile` is set, submits and times each dispatch on its own
-/// (adding each to its slot of `stage_times`). Returns the time spent.
+/// Records `pending` with the bindings `refs` in one submission, waits for
+/// it and empties `pending`, or, when `profile` is set, submits and times
+/// each dispatch on its own (adding each to its slot of `stage_times`).
+/// Returns the time spent (zero when nothing was pending).
 fn submit(
     ctx: &Context,
-    pushes: &[StagePush],
+    pending: &mut Vec<StagePush>,
     refs: &[Resource],
     profile: bool,
     stage_times: &mut [Duration],
 ) -> Result<Duration, RenderError> {
-    let chain: Vec<Dispatch> = pushes
+    let chain: Vec<Dispatch> = pending
         .iter()
         .map(|(_, pipeline, push, groups)| Dispatch {
             pipeline,
@@ -353,15 +354,17 @@ fn submit(
             groups: *groups,
         })
         .collect();
-    if !profile {
-        return Ok(ctx.dispatch_chain(&chain)?);
-    }
     let mut total = Duration::ZERO;
-    for ((slot, ..), d) in pushes.iter().zip(&chain) {
-        let t = ctx.dispatch_chain(std::slice::from_ref(d))?;
-        stage_times[*slot] += t;
-        total += t;
+    if profile {
+        for ((slot, ..), d) in pending.iter().zip(&chain) {
+            let t = ctx.dispatch_chain(std::slice::from_ref(d))?;
+            stage_times[*slot] += t;
+            total += t;
+        }
+    } else if !chain.is_empty() {
+        total = ctx.dispatch_chain(&chain)?;
     }
+    pending.clear();
     Ok(total)
 }
 
@@ -1181,17 +1184,14 @@ impl Renderer {
             // without `cancel`, a pass's tiles go in one submission per band.
             let mut pending: Vec<StagePush> = Vec::new();
             let mut pending_band = 0;
+            let profile = self.profile_stages;
+            let mut flush = |pending: &mut Vec<StagePush>, band: usize| {
+                submit(ctx, pending, &band_refs[band], profile, &mut stage_times)
+            };
             for &(origin, size) in &tiles {
                 let band = bands.band_of(origin[1]);
-                if band != pending_band && !pending.is_empty() {
-                    render += submit(
-                        ctx,
-                        &pending,
-                        &band_refs[pending_band],
-                        self.profile_stages,
-                        &mut stage_times,
-                    )?;
-                    pending.clear();
+                if band != pending_band {
+                    render += flush(&mut pending, pending_band)?;
                 }
                 pending_band = band;
                 let base = PushConstants {
@@ -1245,26 +1245,11 @@ impl Renderer {
                         }
                     }
                     if cancel.is_some() {
-                        render += submit(
-                            ctx,
-                            &pending,
-                            &band_refs[pending_band],
-                            self.profile_stages,
-                            &mut stage_times,
-                        )?;
-                        pending.clear();
+                        render += flush(&mut pending, pending_band)?;
                     }
                 }
             }
-            if !pending.is_empty() {
-                render += submit(
-                    ctx,
-                    &pending,
-                    &band_refs[pending_band],
-                    self.profile_stages,
-                    &mut stage_times,
-                )?;
-            }
+            render += flush(&mut pending, pending_band)?;
             let after = read_counters()?;
             primary_rays += after[0].wrapping_sub(before[0]) as u64;
             shadow_rays += after[1].wrapping_sub(before[1]) as u64;
