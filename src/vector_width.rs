@@ -12,13 +12,27 @@
 //! job in, width out) so that every branch is testable on any machine; [`apply`]
 //! puts it into the process environment, which must happen before the Vulkan
 //! instance is created. The variable has no effect on GPU drivers.
+//!
+//! Mesa's shader cache does not key its entries by the vector width: lavapipe
+//! of Mesa 25.0 loads the machine code that a 256-bit run cached into a 512-bit
+//! run, and the reverse (docs/drivers.md, "The shader cache and the width").
+//! So [`apply`] also gives each width a cache directory of its own
+//! ([`cache_dir`]), and a width once chosen is the width the kernel runs at.
 
+use std::ffi::OsString;
 use std::fmt;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Duration;
 
 /// The environment variable lavapipe reads its vector width from.
 pub const VARIABLE: &str = "LP_NATIVE_VECTOR_WIDTH";
+
+/// The environment variable that names the directory of Mesa's shader cache.
+pub const CACHE_VARIABLE: &str = "MESA_SHADER_CACHE_DIR";
+
+/// The name of a width's own cache directory starts with this; the width follows.
+pub const CACHE_PREFIX: &str = "penumbra-lp";
 
 /// A render is "long" (worth 512-bit vectors) from this many primary rays
 /// (width × height × passes) on: 64 passes at 1024×1024.
@@ -209,10 +223,43 @@ pub fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) ->
     }
 }
 
+/// The shader cache directory for `bits`-wide code: `penumbra-lp{bits}` under
+/// the directory Mesa would use otherwise (`MESA_SHADER_CACHE_DIR`, else
+/// `$XDG_CACHE_HOME`, else `$HOME/.cache`), or in place of a `penumbra-lp…`
+/// directory that a parent penumbra process chose, so that widths never nest.
+/// `None` where Mesa's cache is disabled (`MESA_SHADER_CACHE_DISABLE` true) or
+/// no base directory is known. `var` reads the environment.
+pub fn cache_dir(bits: u32, var: impl Fn(&str) -> Option<OsString>) -> Option<PathBuf> {
+    let disabled = var("MESA_SHADER_CACHE_DISABLE").is_some_and(|v| {
+        matches!(
+            v.to_string_lossy().to_ascii_lowercase().as_str(),
+            "1" | "true" | "yes" | "y"
+        )
+    });
+    if disabled {
+        return None;
+    }
+    let nonempty = |k: &str| var(k).filter(|v| !v.is_empty()).map(PathBuf::from);
+    let base = nonempty(CACHE_VARIABLE)
+        .or_else(|| nonempty("XDG_CACHE_HOME"))
+        .or_else(|| nonempty("HOME").map(|h| h.join(".cache")))?;
+    let ours = |p: &Path| {
+        p.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with(CACHE_PREFIX))
+    };
+    let base = match base.parent() {
+        Some(parent) if ours(&base) => parent.to_path_buf(),
+        _ => base,
+    };
+    Some(base.join(format!("{CACHE_PREFIX}{bits}")))
+}
+
 /// Chooses for this process ([`choose`] with this CPU and environment) and sets
-/// `LP_NATIVE_VECTOR_WIDTH` accordingly. Call it before the Vulkan instance is
-/// created (lavapipe reads the variable when it loads) and while no other
-/// thread reads the environment: early in `main`.
+/// `LP_NATIVE_VECTOR_WIDTH` accordingly, with `MESA_SHADER_CACHE_DIR` set to
+/// the width's own [`cache_dir`] (made if missing; if it cannot be made, Mesa
+/// runs without a disk cache, as it does for any unwritable directory). Call it
+/// before the Vulkan instance is created (lavapipe reads both when it loads)
+/// and while no other thread reads the environment: early in `main`.
 pub fn apply(request: Request, job: Job) -> Choice {
     let env = std::env::var(VARIABLE).ok();
     let gallium = std::env::var("GALLIUM_OVERRIDE_CPU_CAPS").ok();
@@ -222,6 +269,13 @@ pub fn apply(request: Request, job: Job) -> Choice {
         if let Some(b) = choice.bits {
             std::env::set_var(VARIABLE, b.to_string());
         }
+    }
+    if let Some(dir) = choice
+        .bits
+        .and_then(|b| cache_dir(b, |k| std::env::var_os(k)))
+    {
+        let _ = std::fs::create_dir_all(&dir);
+        std::env::set_var(CACHE_VARIABLE, dir);
     }
     choice
 }
@@ -337,6 +391,54 @@ mod tests {
             choose(Request::Auto, None, cpu, render(None, 64, None)).bits,
             Some(256)
         );
+    }
+
+    /// An environment of these variables only.
+    fn vars(pairs: &[(&str, &str)]) -> impl Fn(&str) -> Option<OsString> {
+        let owned: Vec<(String, OsString)> = pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), OsString::from(v)))
+            .collect();
+        move |k| owned.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone())
+    }
+
+    #[test]
+    fn each_width_has_its_own_cache_directory() {
+        let home = vars(&[("HOME", "/home/u")]);
+        assert_eq!(
+            cache_dir(512, &home),
+            Some(PathBuf::from("/home/u/.cache/penumbra-lp512"))
+        );
+        assert_ne!(cache_dir(256, &home), cache_dir(512, &home));
+        let xdg = vars(&[("HOME", "/home/u"), ("XDG_CACHE_HOME", "/x")]);
+        assert_eq!(
+            cache_dir(256, xdg),
+            Some(PathBuf::from("/x/penumbra-lp256"))
+        );
+        // The user's own directory is the base: a farm's shared cache stays shared.
+        let user = vars(&[("HOME", "/home/u"), (CACHE_VARIABLE, "/shared/mesa")]);
+        assert_eq!(
+            cache_dir(512, user),
+            Some(PathBuf::from("/shared/mesa/penumbra-lp512"))
+        );
+        // A parent penumbra's choice is replaced, not nested.
+        let parent = vars(&[(CACHE_VARIABLE, "/shared/mesa/penumbra-lp256")]);
+        assert_eq!(
+            cache_dir(512, parent),
+            Some(PathBuf::from("/shared/mesa/penumbra-lp512"))
+        );
+    }
+
+    #[test]
+    fn a_disabled_cache_or_no_base_gets_no_directory() {
+        for v in ["true", "1", "TRUE", "yes"] {
+            let off = vars(&[("HOME", "/home/u"), ("MESA_SHADER_CACHE_DISABLE", v)]);
+            assert_eq!(cache_dir(512, off), None, "{v}");
+        }
+        let on = vars(&[("HOME", "/home/u"), ("MESA_SHADER_CACHE_DISABLE", "false")]);
+        assert!(cache_dir(512, on).is_some());
+        assert_eq!(cache_dir(512, vars(&[])), None);
+        assert_eq!(cache_dir(512, vars(&[("HOME", "")])), None);
     }
 
     #[test]

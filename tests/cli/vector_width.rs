@@ -131,3 +131,67 @@ fn a_bad_width_is_one_error_naming_the_flag() {
         assert!(!dir.path().join("out.png").exists());
     }
 }
+
+/// Mesa 25.0's shader cache does not key its entries by the vector width, so a
+/// render at one width after another would run the first one's cached machine
+/// code. Each width gets its own cache directory under the user's
+/// `MESA_SHADER_CACHE_DIR`, and each render fills its own.
+#[test]
+fn each_width_compiles_into_its_own_shader_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let files = |bits: u32| -> usize {
+        let d = cache.join(format!("{}{bits}", vector_width::CACHE_PREFIX));
+        walk(&d)
+    };
+    for bits in [256, 128] {
+        let out = dir.path().join("out.png");
+        let output = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args(["render", &scene(), "-o", out.to_str().unwrap()])
+            .args(["--device", "llvmpipe", "--width", "96", "--height", "54"])
+            .args(["--vector-width", &bits.to_string()])
+            .env_remove("GALLIUM_OVERRIDE_CPU_CAPS")
+            .env_remove(vector_width::VARIABLE)
+            .env_remove("MESA_SHADER_CACHE_DISABLE")
+            .env(vector_width::CACHE_VARIABLE, &cache)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        let line = summary(&output, &stdout);
+        assert!(line.contains(&format!(", {bits} bits)")), "{line}");
+        assert!(
+            files(bits) > 0,
+            "{bits}-bit code went to no cache of its own"
+        );
+    }
+    assert!(
+        files(256) > 0,
+        "the 128-bit render removed the 256-bit cache"
+    );
+    let stray: Vec<_> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with(vector_width::CACHE_PREFIX))
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "cache entries outside the widths' directories: {stray:?}"
+    );
+}
+
+/// The number of files under `dir` (0 if it does not exist).
+fn walk(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .map(|e| {
+            let e = e.unwrap();
+            if e.file_type().unwrap().is_dir() {
+                walk(&e.path())
+            } else {
+                1
+            }
+        })
+        .sum()
+}
