@@ -9,14 +9,13 @@
 # median of the per-round ratios B/A and its range.
 #
 #   tools/ab_commits.sh A_COMMIT B_COMMIT [ROUNDS] [SCENE]
+#   tools/ab_commits.sh --build COMMIT     builds only; prints the path of COMMIT's ab binary
+#                                          (its shaders are in the worktree beside it:
+#                                          tools/isa_steps.sh uses both)
 #
 # Example: tools/ab_commits.sh HEAD~1 HEAD 7 scenes/bunny_scene.glb
 set -euo pipefail
 
-a=${1:?usage: tools/ab_commits.sh A_COMMIT B_COMMIT [ROUNDS] [SCENE]}
-b=${2:?usage: tools/ab_commits.sh A_COMMIT B_COMMIT [ROUNDS] [SCENE]}
-rounds=${3:-7}
-scene=${4:-scenes/bunny_scene.glb}
 root=$(git rev-parse --show-toplevel)
 scratch=${AB_SCRATCH:-$root/target/ab_commits}
 mkdir -p "$scratch"
@@ -34,6 +33,14 @@ build() { # commit -> path of its ab binary
     # (tools/Cargo.toml) build `ab` as its binary; older ones as the root
     # package's example.
     if [ ! -x "$scratch/ab-$sha" ]; then
+        # A commit from before the workspace (no [workspace] table) would
+        # otherwise count as a member of this checkout's workspace, above it.
+        grep -q '^\[workspace\]' "$dir/Cargo.toml" || printf '\n[workspace]\n' >>"$dir/Cargo.toml"
+        # Cargo names a path package's build by its path relative to the
+        # workspace root, the same in every scratch worktree, and rebuilds it
+        # only for sources newer than that build: a worktree made before
+        # another commit's build would pass for built. Make its files newer.
+        find "$dir" -path "$dir/.git" -prune -o -type f -exec touch {} +
         if [ -f "$dir/tools/Cargo.toml" ]; then
             (cd "$dir" && CARGO_TARGET_DIR=$scratch/target cargo build -q --release -p penumbra-tools --bin ab >&2)
             cp "$scratch/target/release/ab" "$scratch/ab-$sha"
@@ -44,6 +51,15 @@ build() { # commit -> path of its ab binary
     fi
     echo "$scratch/ab-$sha"
 }
+
+if [ "${1:-}" = --build ]; then
+    build "${2:?usage: tools/ab_commits.sh --build COMMIT}"
+    exit 0
+fi
+a=${1:?usage: tools/ab_commits.sh A_COMMIT B_COMMIT [ROUNDS] [SCENE]}
+b=${2:?usage: tools/ab_commits.sh A_COMMIT B_COMMIT [ROUNDS] [SCENE]}
+rounds=${3:-7}
+scene=${4:-scenes/bunny_scene.glb}
 
 run() { # binary, shader tree -> median worker-CPU ms per frame of one process
     (cd "$root" && "$1" "$scene" --b "$2" --pairs 3 --cpu-time 2>/dev/null) |

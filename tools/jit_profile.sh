@@ -11,7 +11,12 @@
 #   - `and $0x7` lane masks: a vector lane chosen by a loop counter, which LLVM lowers to
 #     storing the whole vector to the stack, writing one lane and reloading it;
 #   - the share of samples in the kernel and inside the per-lane loops, by the storage-buffer
-#     slot of the lavapipe context they read.
+#     slot of the lavapipe context they read;
+#   - the instruction sets of all the generated code (every anonymous executable mapping, each
+#     stage's pipeline among them): EVEX-encoded instructions (AVX-512's encoding), those on
+#     512-bit zmm registers, on the opmask registers k1-k7 and on registers 16-31. All four are
+#     zero for AVX2 code, so a run under GALLIUM_OVERRIDE_CPU_CAPS=avx on an AVX-512 CPU shows
+#     whether the cap holds (the environment passes through to the render).
 #
 #   tools/jit_profile.sh [installed|OLD]     OLD: the tree of tools/mesa_tree.sh
 #
@@ -30,24 +35,35 @@ if [ "$driver" != installed ]; then
   env=(VK_DRIVER_FILES="$icd" VK_ICD_FILENAMES="$icd")
 fi
 work=$(mktemp -d)
-trap 'kill "$pid" 2>/dev/null || true; rm -rf "$work"' EXIT
+[ -z "${JIT_PROFILE_KEEP:-}" ] || echo "jit_profile.sh: keeping $work" >&2
+trap 'kill "$pid" 2>/dev/null || true; [ -n "${JIT_PROFILE_KEEP:-}" ] || rm -rf "$work"' EXIT
 # A warm-up render fills the shader cache; the profiled one renders passes for long enough.
-env "${env[@]}" "$bin" render scenes/bunny_scene.glb --spp 2 -o "$work/o.png" >/dev/null
-env "${env[@]}" "$bin" render scenes/bunny_scene.glb --spp 64 -o "$work/o.png" >"$work/render.log" &
+# Both at 256 bits, lavapipe's default, which auto would raise to 512 for 64 passes on a CPU
+# with AVX-512; an LP_NATIVE_VECTOR_WIDTH in the environment still wins.
+env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 2 -o "$work/o.png" >/dev/null
+env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 64 -o "$work/o.png" >"$work/render.log" &
 pid=$!
 sleep 4
 perf record -q -e cpu-clock -p "$pid" -o "$work/perf.data" -- sleep 4 >/dev/null 2>&1
 gdb -p "$pid" -batch -ex 'info proc mappings' >"$work/maps" 2>/dev/null
-read -r start end < <(python3 -c '
+# Anonymous executable mappings (no file name): lavapipe's generated code, largest first.
+python3 -c '
 import sys
-best = (0, "", "")
+maps = []
 for f in (l.split() for l in open(sys.argv[1])):
     if len(f) == 5 and f[4] == "r-xp" and f[0].startswith("0x"):
-        best = max(best, (int(f[1], 16) - int(f[0], 16), f[0], f[1]))
-print(best[1], best[2])' "$work/maps")
-gdb -p "$pid" -batch -ex "dump memory $work/jit.bin $start $end" >/dev/null 2>&1
+        maps.append((int(f[1], 16) - int(f[0], 16), f[0], f[1]))
+for _, a, b in sorted(maps, reverse=True):
+    print(a, b)' "$work/maps" >"$work/jit_maps"
+read -r start end <"$work/jit_maps"
+dumps=()
+while read -r a b; do dumps+=(-ex "dump memory $work/jit-$a.bin $a $b"); done <"$work/jit_maps"
+gdb -p "$pid" -batch "${dumps[@]}" >/dev/null 2>&1
 kill "$pid" 2>/dev/null || true
-objdump -D -b binary -m i386:x86-64 --adjust-vma="$start" "$work/jit.bin" >"$work/jit.s"
+while read -r a b; do
+  objdump -D -b binary -m i386:x86-64 --adjust-vma="$a" "$work/jit-$a.bin" >"$work/jit-$a.s"
+done <"$work/jit_maps"
+cp "$work/jit-$start.s" "$work/jit.s"
 perf script -i "$work/perf.data" -F ip,dso 2>/dev/null >"$work/samples"
 echo "driver: $(env "${env[@]}" "$bin" devices | grep -i llvmpipe | head -n1 | sed -E 's/.*driver //')"
 python3 - "$work" "$start" "$end" <<'EOF'
@@ -85,4 +101,24 @@ inside = sum(by_slot.values())
 print(f"samples inside per-lane loops: {100 * inside / max(in_jit, 1):.1f}% of the kernel's")
 for k, v in by_slot.most_common(8):
     print(f"  context offsets {k}: {100 * v / max(in_jit, 1):.1f}%")
+
+# Instruction sets, over every mapping. In 64-bit mode a 0x62 byte that opens an instruction
+# (after an optional 0x67 address-size prefix, the only legacy prefix EVEX allows) is the
+# EVEX prefix: VEX-encoded AVX2 code never starts with it.
+maps = [l.split() for l in open(f"{work}/jit_maps")]
+n = evex = zmm = kmask = high = 0
+for a, _ in maps:
+    for line in open(f"{work}/jit-{a}.s"):
+        m = re.match(r"\s*[0-9a-f]+:\s+((?:[0-9a-f]{2} )+)\s*(\S.*)", line)
+        if not m:
+            continue
+        code, t = m.group(1).split(), m.group(2)
+        n += 1
+        if code[0] == "62" or (code[0] == "67" and len(code) > 1 and code[1] == "62"):
+            evex += 1
+        zmm += "%zmm" in t
+        kmask += bool(re.search(r"%k[1-7]\b", t))
+        high += bool(re.search(r"%[xyz]mm(1[6-9]|2[0-9]|3[01])\b", t))
+print(f"generated code: {len(maps)} mappings, {n} instructions; AVX-512: {evex} EVEX-encoded, "
+      f"{zmm} on zmm registers, {kmask} on opmask registers, {high} on registers 16-31")
 EOF
