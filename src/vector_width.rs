@@ -2,11 +2,14 @@
 //!
 //! lavapipe (llvmpipe) runs a compute shader's invocations in SIMD lanes of
 //! `LP_NATIVE_VECTOR_WIDTH` bits (128, 256 or 512), read once when the driver
-//! loads. Wider vectors trace more rays per instruction but make the driver's
-//! compile of the kernel slower, so the right width depends on the job: a batch
-//! render long enough to repay the longer compile wants 512 bits where the CPU
-//! has AVX-512, while `watch`, where every shader edit waits for the compile,
-//! keeps 256. The figures behind the rule are in docs/drivers.md ("Vector width").
+//! loads. Wider vectors can trace more rays per instruction but make the
+//! driver's compile of the kernel slower, so the right width depends on the
+//! kernel and the job: where a kernel runs faster at 512 bits on a CPU with
+//! AVX-512, a batch render long enough to repay the longer compile wants them,
+//! while `watch`, where every shader edit waits for the compile, keeps 256. The
+//! current kernel runs slower at 512 bits ([`WIDE_SPEEDUP`]), so auto keeps
+//! 256 for every job. The figures behind the rule are in docs/drivers.md
+//! ("Vector width").
 //!
 //! [`choose`] is the decision as a pure function (CPU features, environment and
 //! job in, width out) so that every branch is testable on any machine; [`apply`]
@@ -34,7 +37,14 @@ pub const CACHE_VARIABLE: &str = "MESA_SHADER_CACHE_DIR";
 /// The name of a width's own cache directory starts with this; the width follows.
 pub const CACHE_PREFIX: &str = "penumbra-lp";
 
-/// A render is "long" (worth 512-bit vectors) from this many primary rays
+/// 512-bit vectors' speed-up over 256-bit ones for the current kernel on a CPU
+/// with AVX-512 (frame time at 256 / at 512; docs/drivers.md, "Vector width",
+/// gives the measurements). At or below 1 the wider vectors never pay, however
+/// long the render, and auto keeps 256: so it is for the staged renderer, whose
+/// frames run slower at 512 bits; the megakernel before it ran faster.
+pub const WIDE_SPEEDUP: f64 = 0.91;
+
+/// A render is "long" (worth 512-bit vectors, where they are faster) from this many primary rays
 /// (width × height × passes) on: 64 passes at 1024×1024.
 pub const LONG_RENDER_PRIMARY_RAYS: u64 = 1 << 26;
 
@@ -155,6 +165,8 @@ pub enum Reason {
     LongRenderWithAvx512,
     /// Auto: AVX-512, but the render is too short to repay the compile.
     ShortRender,
+    /// Auto: AVX-512, but the kernel runs slower at 512 bits ([`WIDE_SPEEDUP`]).
+    WideSlower,
     /// Auto: `watch` keeps 256 for compile latency.
     Watch,
     /// Auto: no AVX-512 on this CPU.
@@ -188,6 +200,7 @@ impl fmt::Display for Choice {
             Reason::Flag => "--vector-width",
             Reason::LongRenderWithAvx512 => "auto: AVX-512, long render",
             Reason::ShortRender => "auto: AVX-512, short render",
+            Reason::WideSlower => "auto: AVX-512, but 512 bits run this kernel slower",
             Reason::Watch => "auto: watch",
             Reason::NoAvx512 => "auto: no AVX-512",
             Reason::NoAvx => "auto: no AVX",
@@ -196,11 +209,25 @@ impl fmt::Display for Choice {
     }
 }
 
-/// Chooses the width: the user's `LP_NATIVE_VECTOR_WIDTH` (`env`) first, then
-/// `--vector-width`, else by CPU and job — 512 for a long render
-/// ([`Job::is_long`]) on a CPU with AVX-512, 256 on any CPU with AVX
-/// otherwise (`watch` included), and the driver's default without AVX.
+/// Chooses the width for the current kernel: [`choose_for_kernel`] with its
+/// measured [`WIDE_SPEEDUP`].
 pub fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) -> Choice {
+    choose_for_kernel(request, env, cpu, job, WIDE_SPEEDUP)
+}
+
+/// Chooses the width for a kernel whose 512-bit frames run `wide_speedup`
+/// times as fast as its 256-bit ones: the user's `LP_NATIVE_VECTOR_WIDTH`
+/// (`env`) first, then `--vector-width`, else by CPU and job — 512 for a long
+/// render ([`Job::is_long`]) on a CPU with AVX-512 if the wider vectors are
+/// faster, 256 on any CPU with AVX otherwise (`watch` included), and the
+/// driver's default without AVX.
+pub fn choose_for_kernel(
+    request: Request,
+    env: Option<&str>,
+    cpu: CpuVectors,
+    job: Job,
+    wide_speedup: f64,
+) -> Choice {
     if let Some(v) = env {
         return Choice {
             bits: v.trim().parse().ok(),
@@ -213,6 +240,7 @@ pub fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) ->
         Request::Auto if !cpu.avx => (None, Reason::NoAvx),
         Request::Auto if job == Job::Watch => (Some(256), Reason::Watch),
         Request::Auto if !cpu.avx512f => (Some(256), Reason::NoAvx512),
+        Request::Auto if wide_speedup <= 1.0 => (Some(256), Reason::WideSlower),
         Request::Auto if job.is_long() => (Some(512), Reason::LongRenderWithAvx512),
         Request::Auto => (Some(256), Reason::ShortRender),
     };
@@ -305,8 +333,35 @@ mod tests {
         }
     }
 
+    /// A kernel whose 512-bit frames are faster: the megakernel's 1.13.
+    fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) -> Choice {
+        choose_for_kernel(request, env, cpu, job, 1.13)
+    }
+
     #[test]
-    fn long_renders_on_avx512_get_512() {
+    fn this_kernel_keeps_256_on_avx512_since_512_bits_run_it_slower() {
+        for job in [
+            render(None, 1 << 20, None),
+            render(None, 1, None),
+            Job::Watch,
+        ] {
+            let c = super::choose(Request::Auto, None, ZEN4, job);
+            assert_eq!(c.bits, Some(256), "{job:?}");
+        }
+        let c = super::choose(Request::Auto, None, ZEN4, render(None, 1000, None));
+        assert_eq!(
+            c.to_string(),
+            "vector width 256 (auto: AVX-512, but 512 bits run this kernel slower)"
+        );
+        // The flag and the environment still give 512.
+        let c = super::choose(Request::Bits(512), None, ZEN4, render(None, 1, None));
+        assert_eq!((c.bits, c.reason), (Some(512), Reason::Flag));
+        let c = super::choose(Request::Auto, Some("512"), ZEN4, Job::Watch);
+        assert_eq!(c.bits, Some(512));
+    }
+
+    #[test]
+    fn long_renders_on_avx512_get_512_where_it_is_faster() {
         let c = choose(Request::Auto, None, ZEN4, render(None, 64, None));
         assert_eq!(c.bits, Some(512));
         assert_eq!(
