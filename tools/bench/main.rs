@@ -150,12 +150,22 @@ fn main() -> anyhow::Result<()> {
             ..Default::default()
         })
     };
+    if results.cpu_info.avx512() && results.peers.why_not().is_none() {
+        let env = [parts::knobs::AVX2_CAP, ("PENUMBRA_PEERS_ISA", "avx2")];
+        results.peers_avx2 = Some(
+            child(&args, p, "peers", &env).unwrap_or_else(|e| PeersPart {
+                not_measured: Some(format!("the AVX2 peers part failed: {e:#}")),
+                ..Default::default()
+            }),
+        );
+    }
     results.specialise = child(&args, p, "specialise", &[])?;
     results.textures = Some(child(&args, p, "textures", &[])?);
     results.scaling = child(&args, p, "scaling", &[])?;
     if !args.no_knobs {
         results.knob_rounds = if args.quick { 1 } else { 3 };
         results.knobs = parts::knobs::run(&args, p, results.knob_rounds);
+        results.drivers = Some(parts::drivers::run(&args, p, results.knob_rounds));
     }
     results.profile = parts::profile::run(&args, p);
     results.parts = parts;
@@ -247,6 +257,7 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
     let json = match part {
         "throughput" => serde_json::to_string(&parts::throughput::run(args, true)?)?,
         "knob" => serde_json::to_string(&parts::throughput::run(args, false)?)?,
+        "driver" => serde_json::to_string(&parts::throughput::run_matrix(args)?)?,
         "seminar" => serde_json::to_string(&parts::seminar::run(args)?)?,
         "scaling" => serde_json::to_string(&parts::scaling::run(args)?)?,
         "specialise" => serde_json::to_string(&parts::specialise::run(args)?)?,
@@ -320,6 +331,22 @@ mod tests {
         assert!(
             same(&again, &tree),
             "docs/bench.json does not round-trip through the schema"
+        );
+    }
+
+    /// The committed `docs/bench.md` is what the report writes from the
+    /// committed `docs/bench.json`: no figure in it was edited by hand, and
+    /// every section's code runs on real results (regenerate with
+    /// `--from-json docs/bench.json` after changing the report's code).
+    #[test]
+    fn committed_report_is_written_from_committed_results() {
+        let root = common::repo_root();
+        let text = std::fs::read_to_string(root.join("docs/bench.json")).expect("docs/bench.json");
+        let results: Results = serde_json::from_str(&text).expect("the schema reads it");
+        let committed = std::fs::read_to_string(root.join("docs/bench.md")).expect("docs/bench.md");
+        assert!(
+            crate::report::markdown(&results) == committed,
+            "docs/bench.md differs from what docs/bench.json writes: run the bench with --from-json docs/bench.json"
         );
     }
 }

@@ -284,6 +284,16 @@ pub struct Results {
     /// Mitsuba 3 and Embree 4, interleaved with penumbra in this run.
     #[serde(default)]
     pub peers: PeersPart,
+    /// The peers part again with AVX2 code on both sides, on a CPU with
+    /// AVX-512: lavapipe under [`crate::parts::knobs::AVX2_CAP`], the peers
+    /// under `PENUMBRA_PEERS_ISA=avx2` (tools/peers/peers.py). Absent on a
+    /// CPU without AVX-512, where [`Results::peers`] is AVX2 code already.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peers_avx2: Option<PeersPart>,
+    /// The driver matrix; absent from reports written before the benchmark
+    /// measured it, and with `--no-knobs` (on a GPU it does not apply).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drivers: Option<DriversPart>,
     /// The one-shot CLI render, timed end to end; absent from reports
     /// written before the benchmark timed it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -338,6 +348,45 @@ pub struct PeersPart {
     /// Every penumbra frame of the part.
     pub penumbra_ms: Stat,
     pub peers: Vec<PeerRun>,
+}
+
+/// The driver matrix (`crate::parts::drivers`): the bunny and the showcase
+/// on every lavapipe at hand.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct DriversPart {
+    /// Why only the installed driver ran, when no other tree was found.
+    pub note: Option<String>,
+    pub rounds: usize,
+    /// The installed driver first.
+    pub drivers: Vec<DriverRun>,
+}
+
+/// One driver of the matrix.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct DriverRun {
+    /// `installed`, or the ICD file of the tree, relative to the repository.
+    pub icd: String,
+    /// The device as the driver names it (its first round).
+    pub device: Device,
+    /// Why a round failed, when one did.
+    pub error: Option<String>,
+    pub scenes: Vec<DriverScene>,
+}
+
+/// One scene on one driver.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct DriverScene {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    /// Primary + shadow rays of a frame.
+    pub rays: u64,
+    /// The driver's cold compile, per round.
+    pub driver_compile_ms: Vec<f64>,
+    /// Every frame of every round.
+    pub render_ms: Stat,
+    /// Per round: the installed driver's median frame / this driver's.
+    pub speed_vs_installed: Stat,
 }
 
 /// The one-shot CLI render: `penumbra render` of the bunny scene as a user

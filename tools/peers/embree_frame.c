@@ -62,11 +62,13 @@ static RTCScene scene;
 static float *tri_normal; /* unnormalised geometric normal per triangle */
 
 /* Builds the scene from `nt` triangles (`idx`, 3 per triangle) over `nv`
- * vertices (`pos`, xyz). Returns 0, or Embree's error code. */
+ * vertices (`pos`, xyz) on a device of `threads` threads that uses the
+ * instruction set `isa` (Embree's device configuration, e.g. "avx2"), or the
+ * best the CPU has when `isa` is empty. Returns 0, or Embree's error code. */
 int pe_init(const float *pos, unsigned nv, const unsigned *idx, unsigned nt,
-            int threads) {
-  char config[64];
-  snprintf(config, sizeof config, "threads=%d", threads);
+            int threads, const char *isa) {
+  char config[96];
+  snprintf(config, sizeof config, "threads=%d%s%s", threads, *isa ? ",isa=" : "", isa);
   device = rtcNewDevice(config);
   if (!device) return -1;
   scene = rtcNewScene(device);

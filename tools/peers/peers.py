@@ -32,6 +32,12 @@ Usage:
                                       "frame" line read from stdin
   peers.py versions                   the peers' package versions as JSON
 
+With PENUMBRA_PEERS_ISA=avx2 in the environment (the benchmark sets it, with
+GALLIUM_OVERRIDE_CPU_CAPS=avx for lavapipe, to compare AVX2 code on an AVX-512
+machine), Dr.Jit's LLVM back end targets the host CPU with every AVX-512
+feature disabled and 8-wide vectors, and Embree's device is configured with
+isa=avx2; `mitsuba-scalar` is precompiled and stays as it is.
+
 Every line printed on stdout is one JSON object. Counts: `hits` (primary rays
 that hit), `shadow_rays` (shadow rays cast) and `blocked` (shadow rays that
 hit something), where the peer can tell them.
@@ -249,6 +255,8 @@ class Mitsuba:
         if self.llvm:
             self.version += f", {os.path.basename(os.path.realpath(self.llvm))}"
             self.notes += f"; Dr.Jit's LLVM back end on {os.path.realpath(self.llvm)}"
+            if isa() == "avx2":
+                self.notes += "; " + drjit_avx2(dr)
         self.tmp = tempfile.TemporaryDirectory()
         c, l = scene.camera, scene.light
         shapes = {}
@@ -327,6 +335,41 @@ class Mitsuba:
         return {"hits": n_hits, "shadow_rays": n_hits, "blocked": int(blocked.sum())}
 
 
+def isa():
+    """The instruction-set cap the benchmark asks for: "avx2", or "" for the
+    best the CPU has."""
+    value = os.environ.get("PENUMBRA_PEERS_ISA", "")
+    if value not in ("", "avx2"):
+        raise SystemExit(f"PENUMBRA_PEERS_ISA: {value!r} is not avx2")
+    return value
+
+
+def drjit_avx2(dr):
+    """Makes Dr.Jit's LLVM back end (already initialised by set_variant)
+    generate AVX2 code: the host CPU with every AVX-512 feature disabled and
+    8-wide vectors, through drjit-core's exported jit_llvm_set_target (its
+    Python bindings do not expose it). Returns what it set, read back."""
+    import ctypes
+
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    get_cpu = core._Z19jit_llvm_target_cpuv
+    get_features = core._Z24jit_llvm_target_featuresv
+    get_width = core._Z21jit_llvm_vector_widthv
+    get_cpu.restype = get_features.restype = ctypes.c_char_p
+    get_width.restype = ctypes.c_uint32
+    cpu, features = get_cpu(), get_features() or b""
+    capped = b",".join(
+        b"-" + f[1:] if f[1:].startswith(b"avx512") else f for f in features.split(b",") if f
+    )
+    set_target = core._Z19jit_llvm_set_targetPKcS0_j
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    set_target(cpu, capped, 8)
+    now = get_features() or b""
+    if any(f.startswith(b"+avx512") for f in now.split(b",")) or get_width() != 8:
+        raise RuntimeError(f"Dr.Jit kept AVX-512: features {now.decode()}, width {get_width()}")
+    return f"AVX2 code: target {get_cpu().decode()} with AVX-512 disabled, {get_width()}-wide vectors"
+
+
 def write_ply(path, pos, tris):
     import numpy as np
 
@@ -392,7 +435,7 @@ class Embree:
         u = ctypes.POINTER(ctypes.c_uint)
         err = self.lib.pe_init(
             self.pos.ctypes.data_as(p), len(self.pos),
-            self.tris.ctypes.data_as(u), len(self.tris), threads,
+            self.tris.ctypes.data_as(u), len(self.tris), threads, isa().encode(),
         )
         if err != 0:
             raise RuntimeError(f"Embree error {err} building the scene")
@@ -401,7 +444,7 @@ class Embree:
         self.version = (
             f"embreex {version('embreex')}, Embree {v // 10000}.{v // 100 % 100}.{v % 100}"
         )
-        self.notes = "rtcIntersect1, rtcOccluded1"
+        self.notes = "rtcIntersect1, rtcOccluded1" + ("; Embree device isa=avx2" if isa() else "")
         self.width = 0
         if packets:
             native = [w for w, prop in [(16, 34), (8, 33), (4, 32)] if self.lib.pe_property(prop)]
@@ -413,6 +456,7 @@ class Embree:
                 f"{self.width}-ray packets of {tile} pixels (rtcIntersect{self.width}, "
                 f"rtcOccluded{self.width}): the widest this Embree build runs natively on this CPU"
                 + ("" if self.width == 16 else " (16-ray packets need AVX-512 in both)")
+                + ("; Embree device isa=avx2" if isa() else "")
             )
         self.cam = (ctypes.c_float * 12)(*scene.camera_vectors())
         self.to_light = (ctypes.c_float * 3)(*scene.light["to_light"])

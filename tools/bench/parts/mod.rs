@@ -1,9 +1,11 @@
 //! The benchmark's parts, one module per part, each measured in a child
 //! process (`crate::child`) and returned as its struct of `crate::schema`;
-//! `knobs` and `profile` run the throughput part in further children.
+//! `knobs`, `drivers` and `profile` run the throughput part in further
+//! children.
 
 pub mod cli;
 pub mod cpu;
+pub mod drivers;
 pub mod knobs;
 pub mod peers;
 pub mod profile;

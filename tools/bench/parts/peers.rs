@@ -270,9 +270,17 @@ pub fn run(args: &Args) -> anyhow::Result<PeersPart> {
     let up = crate::measure::upload(&mut r, &bunny, k)?;
     let (w, h) = up.size();
     (out.width, out.height) = (w, h);
+    // Under an instruction-set cap (the AVX2 run), the precompiled scalar
+    // Mitsuba is the same code as without it: leave it out.
+    let capped = std::env::var("PENUMBRA_PEERS_ISA").is_ok_and(|v| !v.is_empty());
+    let peers: Vec<&str> = PEERS
+        .iter()
+        .copied()
+        .filter(|p| !(capped && *p == "mitsuba-scalar"))
+        .collect();
     // Start every peer first (each then waits, idle, for its frames).
     let mut servers = Vec::new();
-    for peer in PEERS {
+    for peer in peers.iter().copied() {
         eprintln!("  peers: starting {peer}");
         let (run, server) = start_peer(&python, &root, peer, threads);
         if let Some(e) = &run.error {
@@ -283,7 +291,7 @@ pub fn run(args: &Args) -> anyhow::Result<PeersPart> {
     }
     crate::measure::frame(&mut r, &up, k, w, h)?;
     crate::measure::frame(&mut r, &up, k, w, h)?;
-    let n = PEERS.len();
+    let n = peers.len();
     let mut times: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); n];
     let mut all = Vec::new();
     for round in 0..out.rounds {

@@ -62,6 +62,29 @@ fn throughput_of(
     })
 }
 
+/// The driver matrix's part (`crate::parts::drivers`): the bunny and the
+/// showcase (`scenes/showcase.json`), each at its own size.
+pub fn run_matrix(args: &Args) -> anyhow::Result<ThroughputPart> {
+    let mut r = renderer(args)?;
+    let root = common::repo_root();
+    let bunny = common::meshes::bunny_scene(&root)?;
+    let showcase = penumbra::loaders::load_scene(
+        &root.join("scenes/showcase.json"),
+        &penumbra::loaders::LoadOptions::default(),
+    )?
+    .scene;
+    let reps = if args.quick { 3 } else { 5 };
+    let scenes = vec![
+        throughput_of(&mut r, "bunny_scene.glb", &bunny, Duration::ZERO, reps)?,
+        throughput_of(&mut r, "showcase.json", &showcase, Duration::ZERO, reps)?,
+    ];
+    Ok(ThroughputPart {
+        device: device(&r),
+        env: Vec::new(),
+        scenes,
+    })
+}
+
 /// The part: the bunny, and with `big` the subdivided bunny too, with the
 /// Mesa environment it ran under.
 pub fn run(args: &Args, big: bool) -> anyhow::Result<ThroughputPart> {

@@ -41,3 +41,61 @@ pub fn section(o: &mut String, r: &Results) {
     }
     let _ = writeln!(o);
 }
+
+/// Issue 16's target for every lavapipe a user is likely to have, Mesa 22.3
+/// included: this many Mrays/s on the bunny at 1024×1024.
+pub const DRIVER_TARGET_MRAYS: f64 = 20.0;
+
+/// The driver matrix, after the knobs: the bunny and the showcase on every
+/// lavapipe at hand.
+pub fn drivers_section(o: &mut String, r: &Results) {
+    let Some(d) = &r.drivers else {
+        return;
+    };
+    let _ = writeln!(o, "### Drivers\n");
+    let _ = writeln!(
+        o,
+        "Every lavapipe at hand: the installed one and each driver tree that `tools/mesa_tree.sh` unpacked into `target/` (`tools/setup.sh --tests` unpacks Debian's main-suite one; nothing is installed into the system), each in its own child processes pointed at it by `VK_DRIVER_FILES` and `VK_ICD_FILENAMES`. {} rounds, each running every driver once (a cold compile, a warm-up frame, then the frames of the bunny and of the showcase); the speed is the median over rounds of (the installed driver's median frame / this driver's) within the round.\n",
+        d.rounds
+    );
+    if let Some(n) = &d.note {
+        let _ = writeln!(o, "{n}.\n");
+    }
+    let _ = writeln!(
+        o,
+        "| Driver | Scene | Driver compile (cold), per round | Render ms/frame, median [min–max] of all frames | Mrays/s | Speed vs the installed driver, median [min–max] over rounds |\n|---|---|---|---|---|---|"
+    );
+    for run in &d.drivers {
+        if let Some(e) = &run.error {
+            let _ = writeln!(o, "| `{}` | — | failed: {e} | | | |", run.icd);
+        }
+        for s in &run.scenes {
+            let _ = writeln!(
+                o,
+                "| {} (`{}`) | {} {}×{} | {} ms | {} | {:.1} | {} |",
+                run.device.driver_info,
+                run.icd,
+                s.scene,
+                s.width,
+                s.height,
+                list0(&s.driver_compile_ms),
+                st(&s.render_ms),
+                s.rays as f64 / s.render_ms.median / 1e3,
+                ratio(&s.speed_vs_installed)
+            );
+        }
+    }
+    let _ = writeln!(o);
+    for run in &d.drivers {
+        if let Some(s) = run.scenes.iter().find(|s| s.scene == "bunny_scene.glb") {
+            let mrays = s.rays as f64 / s.render_ms.median / 1e3;
+            let _ = writeln!(
+                o,
+                "- {}: {mrays:.1} Mrays/s on the bunny, ≥ {DRIVER_TARGET_MRAYS:.0} Mrays/s: {}.",
+                run.device.driver_info,
+                super::verdict::met(mrays >= DRIVER_TARGET_MRAYS)
+            );
+        }
+    }
+    let _ = writeln!(o);
+}

@@ -31,6 +31,7 @@ const SECTIONS: &[fn(&mut String, &Results)] = &[
     specialise::section,
     textures::section,
     knobs::section,
+    knobs::drivers_section,
     targets::section,
     targets::profile,
     targets::obstacles,

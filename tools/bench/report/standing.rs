@@ -161,12 +161,79 @@ pub fn section(o: &mut String, r: &Results) {
             zen4
         );
     }
+    let cap = crate::parts::knobs::AVX2_CAP;
+    if let Some(k) = knob(cap.0, cap.1) {
+        let _ = writeln!(
+            o,
+            "| AVX2 code (`{}={}`): speed vs AVX-512 code (the default) | {}× | {} | — |",
+            cap.0,
+            cap.1,
+            ratio(&k.speedup_vs_default),
+            speed_vs_default(k.speedup_vs_default.median)
+        );
+    }
     let _ = writeln!(
         o,
-        "\nThe knob is the environment variable lavapipe reads when it loads (section 5); `penumbra render --vector-width auto` (`src/vector_width.rs`) sets it to 512 only for long renders on a CPU with AVX-512, and this CPU {}.\n",
+        "\nThe knob is the environment variable lavapipe reads when it loads (section 5); `penumbra render --vector-width auto` (`src/vector_width.rs`) {}; this CPU {}.\n",
+        auto_rule(penumbra::vector_width::WIDE_SPEEDUP),
         auto_width(r.cpu_info.avx512())
     );
     let _ = writeln!(o, "{}\n", machines_paragraph(r));
+    isa_comparison(o, r);
+}
+
+/// On a CPU with AVX-512: the peers part's second run with AVX2 code on both
+/// sides next to its first, and the verdict on being no further from
+/// Mitsuba's LLVM variant with AVX2 code than with AVX-512 code.
+fn isa_comparison(o: &mut String, r: &Results) {
+    let Some(avx2) = &r.peers_avx2 else {
+        return;
+    };
+    let _ = writeln!(
+        o,
+        "### AVX2 code against AVX-512 code, on this machine in this run\n"
+    );
+    if let Some(why) = avx2.why_not() {
+        let _ = writeln!(o, "The peers' AVX2 run did not measure them: {why}.\n");
+        return;
+    }
+    let cap = crate::parts::knobs::AVX2_CAP;
+    let _ = writeln!(
+        o,
+        "The peers part (section 7) ran a second time with AVX2 code on both sides: lavapipe under `{}={}` (Mesa's cap on the instruction sets it targets; `tools/jit_profile.sh` counts no EVEX-encoded instruction in the code it then generates), Dr.Jit's LLVM back end targeting this CPU with its AVX-512 features disabled and 8-wide vectors, Embree's device configured with `isa=avx2` (tools/peers/peers.py, `PENUMBRA_PEERS_ISA=avx2`). Each run interleaves penumbra's frames with each peer's ({} and {} rounds); the two runs are consecutive processes.\n",
+        cap.0, cap.1, r.peers.rounds, avx2.rounds
+    );
+    let _ = writeln!(
+        o,
+        "| Peer | AVX-512 code: penumbra vs peer, ms | penumbra / peer | AVX2 code: penumbra vs peer, ms | penumbra / peer |\n|---|---|---|---|---|"
+    );
+    for peer in crate::parts::peers::PEERS {
+        let (Some(a), Some(b)) = (r.peers.valid(peer), avx2.valid(peer)) else {
+            continue;
+        };
+        let _ = writeln!(
+            o,
+            "| {} | {:.1} vs {:.1} | {}× | {:.1} vs {:.1} | {}× |",
+            label(peer),
+            a.penumbra_ms.median,
+            a.frame_ms.median,
+            ratio(&a.ratio),
+            b.penumbra_ms.median,
+            b.frame_ms.median,
+            ratio(&b.ratio)
+        );
+    }
+    if let (Some(a), Some(b)) = (r.peers.valid("mitsuba-llvm"), avx2.valid("mitsuba-llvm")) {
+        let _ = writeln!(
+            o,
+            "\nAVX2 code takes {:.2}× the time of AVX-512 code for penumbra's frame and {:.2}× for Mitsuba's (medians). **No further from Mitsuba 3 `llvm_ad_rgb` with AVX2 code than with AVX-512 code: {}** ({:.2}× against {:.2}×, medians of the pairs).\n",
+            b.penumbra_ms.median / a.penumbra_ms.median,
+            b.frame_ms.median / a.frame_ms.median,
+            met(b.ratio.median <= a.ratio.median),
+            b.ratio.median,
+            a.ratio.median
+        );
+    }
 }
 
 /// What differs between the AVX2 and the AVX-512 machines, from this run's
@@ -220,7 +287,11 @@ fn machines_paragraph(r: &Results) -> String {
             m.frame_ms.median / ZEN4.mitsuba_llvm_ms,
             m.ratio.median,
             ZEN4.bunny_ms / ZEN4.mitsuba_llvm_ms,
-            gap(m.ratio.median, ZEN4.bunny_ms / ZEN4.mitsuba_llvm_ms)
+            if c.avx512() {
+                "both machines have AVX-512, so the difference is the kernel's (the AVX-512 column measured the megakernel of 0e1b0cd, this run the staged renderer) and the machine's own speed (Mitsuba's time above), not the instruction sets'; those are compared on this machine in the next subsection."
+            } else {
+                gap(m.ratio.median, ZEN4.bunny_ms / ZEN4.mitsuba_llvm_ms)
+            }
         );
     }
     s
