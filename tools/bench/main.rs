@@ -150,7 +150,7 @@ fn main() -> anyhow::Result<()> {
             ..Default::default()
         })
     };
-    if results.cpu_info.avx512() && results.peers.why_not().is_none() {
+    if results.cpu_info.avx512_in_use() && results.peers.why_not().is_none() {
         let env = [parts::knobs::AVX2_CAP, ("PENUMBRA_PEERS_ISA", "avx2")];
         results.peers_avx2 = Some(
             child(&args, p, "peers", &env).unwrap_or_else(|e| PeersPart {

@@ -38,6 +38,10 @@ pub struct CpuInfo {
     pub model_name: String,
     /// The flags of [`FLAGS`] this CPU has.
     pub isa: Vec<String>,
+    /// `GALLIUM_OVERRIDE_CPU_CAPS` as the measuring process found it: Mesa's
+    /// cap on the instruction sets lavapipe targets, when one was set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gallium_caps: Option<String>,
 }
 
 impl CpuInfo {
@@ -65,7 +69,19 @@ impl CpuInfo {
                 .filter(|f| have.contains(f))
                 .map(|f| f.to_string())
                 .collect(),
+            gallium_caps: std::env::var("GALLIUM_OVERRIDE_CPU_CAPS").ok(),
         }
+    }
+
+    /// Whether lavapipe generates AVX-512 code here: the CPU has it and no
+    /// `GALLIUM_OVERRIDE_CPU_CAPS` caps it away (a cap that names no
+    /// `avx512` does).
+    pub fn avx512_in_use(&self) -> bool {
+        self.avx512()
+            && self
+                .gallium_caps
+                .as_deref()
+                .is_none_or(|c| c.contains("avx512"))
     }
 
     /// Whether the CPU has AVX-512 Foundation.
@@ -104,10 +120,11 @@ impl CpuInfo {
             self.microarchitecture()
                 .map_or(String::new(), |m| format!(" ({m})")),
             self.isa.join(" "),
-            if self.avx512() {
-                "with AVX-512"
-            } else {
-                "no AVX-512"
+            match (self.avx512(), &self.gallium_caps) {
+                (true, Some(c)) if !self.avx512_in_use() =>
+                    format!("with AVX-512, which lavapipe does not use here (`GALLIUM_OVERRIDE_CPU_CAPS={c}`)"),
+                (true, _) => "with AVX-512".into(),
+                (false, _) => "no AVX-512".into(),
             }
         )
     }
@@ -171,5 +188,36 @@ pub fn git_commit(root: &Path) -> String {
             }
         }
         None => "unknown (not a git checkout)".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CpuInfo;
+
+    #[test]
+    fn a_gallium_cap_below_avx512_turns_it_off_and_the_header_says_so() {
+        let mut c = CpuInfo {
+            vendor: "AuthenticAMD".into(),
+            family: 25,
+            model: 17,
+            model_name: "AMD EPYC".into(),
+            isa: vec!["avx2".into(), "avx512f".into()],
+            gallium_caps: None,
+        };
+        assert!(c.avx512() && c.avx512_in_use());
+        assert!(c.describe().ends_with("; with AVX-512"), "{}", c.describe());
+        c.gallium_caps = Some("avx".into());
+        assert!(c.avx512() && !c.avx512_in_use());
+        assert!(
+            c.describe()
+                .ends_with("which lavapipe does not use here (`GALLIUM_OVERRIDE_CPU_CAPS=avx`)"),
+            "{}",
+            c.describe()
+        );
+        c.isa.pop();
+        c.gallium_caps = None;
+        assert!(!c.avx512_in_use());
+        assert!(c.describe().ends_with("; no AVX-512"));
     }
 }

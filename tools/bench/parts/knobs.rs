@@ -27,7 +27,7 @@ pub fn run(args: &Args, parts: &mut Vec<PartInfo>, rounds: usize) -> Vec<Knob> {
         &[("LP_NATIVE_VECTOR_WIDTH", "256")],
         &[("LP_NATIVE_VECTOR_WIDTH", "512")],
     ];
-    if common::machine::CpuInfo::read().avx512() {
+    if common::machine::CpuInfo::read().avx512_in_use() {
         settings.push(&[AVX2_CAP]);
     }
     // runs[setting][round] = (device name, driver compile, frame times)
