@@ -448,9 +448,9 @@ struct RenderArgs {
     /// any of depth, normal, uv, id (comma-separated).
     #[arg(long)]
     aov: Option<output::AovSet>,
-    /// lavapipe's SIMD width in bits: `auto` takes 512 for long renders on
-    /// AVX-512 CPUs, else 256; LP_NATIVE_VECTOR_WIDTH in the environment
-    /// takes precedence.
+    /// lavapipe's SIMD width in bits: `auto` takes 256 on any CPU with AVX
+    /// (the current kernel runs slower at 512 even with AVX-512);
+    /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
     /// Render only tile I of N (bands of rows) into an OpenEXR part file
