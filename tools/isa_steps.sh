@@ -121,7 +121,7 @@ stats() { # file of numbers -> "median [min–max]"
 }
 med() { sort -g "$1" | awk '{ v[NR] = $1 } END { printf "%.1f", (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
-echo "| step (A → B) | what B changed | ms/frame A → B, AVX-512 | ms/frame A → B, AVX2 | B/A, AVX-512 | B/A, AVX2 | AVX2 ratio / AVX-512 ratio |"
+echo "| step (A → B) | what B changed | ms a frame A → B, AVX-512 | ms a frame A → B, AVX2 | B/A, AVX-512 | B/A, AVX2 | AVX2 ratio / AVX-512 ratio |"
 echo "|---|---|---|---|---|---|---|"
 for i in "${!steps[@]}"; do
   read -r a b kind what <<<"${steps[$i]}"
