@@ -151,7 +151,7 @@ fn main() -> anyhow::Result<()> {
         })
     };
     if results.cpu_info.avx512_in_use() && results.peers.why_not().is_none() {
-        let env = [parts::knobs::AVX2_CAP, ("PENUMBRA_PEERS_ISA", "avx2")];
+        let env = [parts::knobs::AVX2_CAP, parts::peers::AVX2_PEERS];
         results.peers_avx2 = Some(
             child(&args, p, "peers", &env).unwrap_or_else(|e| PeersPart {
                 not_measured: Some(format!("the AVX2 peers part failed: {e:#}")),

@@ -389,6 +389,13 @@ pub struct DriverScene {
     pub speed_vs_installed: Stat,
 }
 
+impl DriverScene {
+    /// Primary + shadow rays per second at the median frame, in millions.
+    pub fn mrays(&self) -> f64 {
+        self.rays as f64 / self.render_ms.median / 1e3
+    }
+}
+
 /// The one-shot CLI render: `penumbra render` of the bunny scene as a user
 /// runs it, the whole process timed from spawn to exit (loading, device
 /// start-up, compile, BVH, frame, PNG), with Mesa's shader cache cold (a

@@ -41,8 +41,9 @@ pub fn run(args: &Args, parts: &mut Vec<PartInfo>, rounds: usize) -> DriversPart
         }),
         ..Default::default()
     };
-    // runs[driver][round]
-    let mut runs: Vec<Vec<ThroughputPart>> = vec![Vec::new(); icds.len()];
+    // runs[driver][round]: None where that round's child failed, so that the
+    // speed-ups below pair each driver's round with the installed one's.
+    let mut runs: Vec<Vec<Option<ThroughputPart>>> = vec![Vec::new(); icds.len()];
     let mut errors: Vec<Option<String>> = vec![None; icds.len()];
     for _ in 0..rounds {
         for (i, icd) in icds.iter().enumerate() {
@@ -52,8 +53,11 @@ pub fn run(args: &Args, parts: &mut Vec<PartInfo>, rounds: usize) -> DriversPart
                 None => Vec::new(),
             };
             match child::<ThroughputPart>(args, parts, "driver", &env) {
-                Ok(p) => runs[i].push(p),
-                Err(e) => errors[i] = Some(format!("{e:#}")),
+                Ok(p) => runs[i].push(Some(p)),
+                Err(e) => {
+                    errors[i] = Some(format!("{e:#}"));
+                    runs[i].push(None);
+                }
             }
         }
     }
@@ -68,24 +72,27 @@ pub fn run(args: &Args, parts: &mut Vec<PartInfo>, rounds: usize) -> DriversPart
             error: errors[i].clone(),
             ..Default::default()
         };
-        if let Some(first) = r.first() {
+        let ok: Vec<&ThroughputPart> = r.iter().flatten().collect();
+        if let Some(first) = ok.first() {
             run.device = first.device.clone();
             for (s, t) in first.scenes.iter().enumerate() {
-                let frames: Vec<f64> = r
+                let frames: Vec<f64> = ok
                     .iter()
                     .flat_map(|p| p.scenes[s].render_ms.samples.clone())
                     .collect();
                 let speedups: Vec<f64> = runs[0]
                     .iter()
                     .zip(r)
-                    .map(|(base, p)| median(base, s) / median(p, s))
+                    .filter_map(|(base, p)| {
+                        Some(median(base.as_ref()?, s) / median(p.as_ref()?, s))
+                    })
                     .collect();
                 run.scenes.push(DriverScene {
                     scene: t.scene.clone(),
                     width: t.width,
                     height: t.height,
                     rays: t.primary_rays + t.shadow_rays,
-                    driver_compile_ms: r.iter().map(|p| p.scenes[s].driver_compile_ms).collect(),
+                    driver_compile_ms: ok.iter().map(|p| p.scenes[s].driver_compile_ms).collect(),
                     render_ms: Stat::of(&frames),
                     speed_vs_installed: Stat::of(&speedups),
                 });

@@ -35,6 +35,10 @@ pub const PEERS: &[&str] = &[
     "embree-packets",
 ];
 
+/// The environment variable that asks tools/peers/peers.py for AVX2 code,
+/// with its value: the benchmark's second peers run on an AVX-512 CPU.
+pub const AVX2_PEERS: (&str, &str) = ("PENUMBRA_PEERS_ISA", "avx2");
+
 /// Blocked shadow-ray counts of two renderers agree when they differ by at
 /// most this fraction: their shadow-ray offsets differ (penumbra's robust
 /// offset, Embree's and Mitsuba's own), which moves a few hundred of the
@@ -272,7 +276,7 @@ pub fn run(args: &Args) -> anyhow::Result<PeersPart> {
     (out.width, out.height) = (w, h);
     // Under an instruction-set cap (the AVX2 run), the precompiled scalar
     // Mitsuba is the same code as without it: leave it out.
-    let capped = std::env::var("PENUMBRA_PEERS_ISA").is_ok_and(|v| !v.is_empty());
+    let capped = std::env::var(AVX2_PEERS.0).is_ok_and(|v| !v.is_empty());
     let peers: Vec<&str> = PEERS
         .iter()
         .copied()

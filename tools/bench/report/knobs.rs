@@ -80,7 +80,7 @@ pub fn drivers_section(o: &mut String, r: &Results) {
                 s.height,
                 list0(&s.driver_compile_ms),
                 st(&s.render_ms),
-                s.rays as f64 / s.render_ms.median / 1e3,
+                s.mrays(),
                 ratio(&s.speed_vs_installed)
             );
         }
@@ -88,7 +88,7 @@ pub fn drivers_section(o: &mut String, r: &Results) {
     let _ = writeln!(o);
     for run in &d.drivers {
         if let Some(s) = run.scenes.iter().find(|s| s.scene == "bunny_scene.glb") {
-            let mrays = s.rays as f64 / s.render_ms.median / 1e3;
+            let mrays = s.mrays();
             let _ = writeln!(
                 o,
                 "- {}: {mrays:.1} Mrays/s on the bunny, ≥ {DRIVER_TARGET_MRAYS:.0} Mrays/s: {}.",

@@ -200,8 +200,8 @@ fn isa_comparison(o: &mut String, r: &Results) {
     let cap = crate::parts::knobs::AVX2_CAP;
     let _ = writeln!(
         o,
-        "The peers part (section 7) ran a second time with AVX2 code on both sides: lavapipe under `{}={}` (Mesa's cap on the instruction sets it targets; `tools/jit_profile.sh` counts no EVEX-encoded instruction in the code it then generates), Dr.Jit's LLVM back end targeting this CPU with its AVX-512 features disabled and 8-wide vectors, Embree's device configured with `isa=avx2` (tools/peers/peers.py, `PENUMBRA_PEERS_ISA=avx2`). Each run interleaves penumbra's frames with each peer's ({} and {} rounds); the two runs are consecutive processes.\n",
-        cap.0, cap.1, r.peers.rounds, avx2.rounds
+        "The peers part (section 7) ran a second time with AVX2 code on both sides: lavapipe under `{}={}` (Mesa's cap on the instruction sets it targets; `tools/jit_profile.sh` counts no EVEX-encoded instruction in the code it then generates), Dr.Jit's LLVM back end targeting this CPU with its AVX-512 features disabled and 8-wide vectors, Embree's device configured with `isa=avx2` (tools/peers/peers.py, `{}={}`). Each run interleaves penumbra's frames with each peer's ({} and {} rounds); the two runs are consecutive processes.\n",
+        cap.0, cap.1, crate::parts::peers::AVX2_PEERS.0, crate::parts::peers::AVX2_PEERS.1, r.peers.rounds, avx2.rounds
     );
     let _ = writeln!(
         o,
