@@ -39,6 +39,9 @@ override HAS_AREA_LIGHTS: bool = true;
 override PIXEL_JITTER: bool = true;
 // Arbitrary output variables (depth, normal, uv, ids) requested.
 override HAS_AOV: bool = true;
+// One chunk holds every light sample of a pixel: the hit stage traces the
+// shadow rays itself and the shadow stage does not run (stages/shadow.wgsl).
+override FUSED_SHADOWS: bool = true;
 
 // Mirrored by render::layout::Globals.
 struct Globals {

@@ -49,6 +49,13 @@ struct Args {
     /// Stage memory bound of side B in KiB.
     #[arg(long)]
     b_stage_kib: Option<u64>,
+    /// Side A runs the shadow stage even where the hit stage could trace
+    /// the shadow rays (`Renderer::set_fused_shadows(false)`).
+    #[arg(long)]
+    a_unfused: bool,
+    /// Side B runs the shadow stage even where the hit stage could trace them.
+    #[arg(long)]
+    b_unfused: bool,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -62,10 +69,15 @@ fn main() -> anyhow::Result<()> {
     };
     let mut sides = Vec::new();
     let sides_in = [
-        ("A", source(&args.a), args.a_stage_kib),
-        ("B", source(&Some(args.b.clone())), args.b_stage_kib),
+        ("A", source(&args.a), args.a_stage_kib, args.a_unfused),
+        (
+            "B",
+            source(&Some(args.b.clone())),
+            args.b_stage_kib,
+            args.b_unfused,
+        ),
     ];
-    for (name, dir, stage_kib) in sides_in {
+    for (name, dir, stage_kib, unfused) in sides_in {
         let mut r = Renderer::new(&RendererOptions {
             device: device.clone(),
             shaders: dir,
@@ -74,6 +86,7 @@ fn main() -> anyhow::Result<()> {
         if let Some(kib) = stage_kib {
             r.set_stage_memory(kib.saturating_mul(1024));
         }
+        r.set_fused_shadows(!unfused);
         let up = r.upload(&scene)?;
         let (w, h) = up.size();
         let t0 = Instant::now();

@@ -1,7 +1,10 @@
 // Stage 1, camera rays and closest hit: one invocation per pixel of the
 // band; writes the pixel's hit record and its resolved material
 // (stages/resolve.wgsl), the background where the ray hit nothing (the shade
-// stage writes the other pixels), and, when asked for, the AOVs.
+// stage writes the other pixels), and, when asked for, the AOVs. With
+// FUSED_SHADOWS (one chunk holds every light sample of a pixel) it also
+// queues the light samples and traces their shadow rays
+// (stages/shadow.wgsl), from the hit it has in registers.
 
 @group(0) @binding(14) var hit_records_out: texture_storage_2d<rgba32uint, write>;
 
@@ -10,6 +13,10 @@
 
 @compute @workgroup_size(8, 8, 1)
 fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    // Before any branch (see first_light).
+    if FUSED_SHADOWS {
+        first_light = lights[0];
+    }
     // The warm-up dispatch makes the driver compile the stage (lavapipe
     // compiles at the first dispatch) without touching any resource.
     if (push.flags & FLAG_WARM_UP) != 0u {
@@ -17,6 +24,7 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let px = stage_pixel(gid);
     var primary = 0u;
+    var traced = 0u;
     if in_image(px) {
         let pixel = px.y * push.size.x + px.x;
         // One sample per pass: the pixel centre, or a stratified point in the
@@ -49,7 +57,14 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         if HAS_AOV && push.pass_index == 0u {
             write_aov(pixel - push.slot_base, hit);
         }
+        // The shade stage reads no queue entry of a pixel that hit nothing.
+        if FUSED_SHADOWS && hit.found {
+            traced = queue_light_samples(pixel, slot, hit, hit.shading_normal);
+        }
         primary = 1u;
     }
     count_rays(0u, primary);
+    if FUSED_SHADOWS {
+        count_rays(1u, traced);
+    }
 }

@@ -8,6 +8,12 @@
 // light. Nothing here depends on a shader: after a shading edit the queue is
 // still valid. Adjacent pixels trace the same light sample together, so the
 // rays of a SIMD group are coherent.
+//
+// When one chunk holds all of a pixel's samples (FUSED_SHADOWS), the hit
+// stage calls `queue_light_samples` right after the closest hit, with the
+// hit still in registers, and this pipeline does not run: reading the hit
+// records back cost about as much as the shadow rays' traversal
+// (docs/stages.md). With several chunks, this pipeline runs once per chunk.
 
 @group(0) @binding(15) var queue: texture_storage_2d<rgba32uint, write>;
 
@@ -35,46 +41,57 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             shading_normal = bitcast<vec3<f32>>(textureLoad(hit_records, record_texel(slot, 2u)).xyz);
         }
         let pixel = px.y * push.size.x + px.x;
-        alpha_pixel = pixel;
-        alpha_stream = 0x0b1f0000u + push.pass_index;
-        let base = slot * push.sample_count;
-        let first = push.sample_first;
-        let end = first + push.sample_count;
-        var k = 0u;
-        for (var i = 0u; i < globals.num_lights && k < end; i++) {
-            var light = first_light;
-            if i > 0u {
-                light = lights[i];
-            }
-            let count = light_sample_count(light);
-            if k + count <= first {
-                k += count;
-                continue;
-            }
-            for (var j = 0u; j < count; j++) {
-                if k >= first && k < end {
-                    var to_light = vec3<f32>(0.0);
-                    var falloff = 0.0;
-                    if start.found {
-                        var uv = vec2<f32>(0.5);
-                        if HAS_AREA_LIGHTS {
-                            uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
-                        }
-                        let ls = sample_light(light, start.position, uv);
-                        if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
-                            traced += 1u;
-                            if !occluded(start, ls.to_light, ls.distance) {
-                                to_light = ls.to_light;
-                                falloff = ls.falloff;
-                            }
-                        }
-                    }
-                    let entry = base + k - first;
-                    textureStore(queue, queue_texel(entry, 0u), vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff)));
-                }
-                k++;
-            }
-        }
+        traced = queue_light_samples(pixel, slot, start, shading_normal);
     }
     count_rays(1u, traced);
+}
+
+// Queues the light samples `push.sample_first ..` of the chunk for the
+// pixel `pixel` with record `slot`, whose primary ray hit `start` (only its
+// found, kind, index, position and geometric normal are read) with shading
+// normal `shading_normal`; returns the number of shadow rays traced. The
+// caller has loaded `first_light`.
+fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f32>) -> u32 {
+    alpha_pixel = pixel;
+    alpha_stream = 0x0b1f0000u + push.pass_index;
+    var traced = 0u;
+    let base = slot * push.sample_count;
+    let first = push.sample_first;
+    let end = first + push.sample_count;
+    var k = 0u;
+    for (var i = 0u; i < globals.num_lights && k < end; i++) {
+        var light = first_light;
+        if i > 0u {
+            light = lights[i];
+        }
+        let count = light_sample_count(light);
+        if k + count <= first {
+            k += count;
+            continue;
+        }
+        for (var j = 0u; j < count; j++) {
+            if k >= first && k < end {
+                var to_light = vec3<f32>(0.0);
+                var falloff = 0.0;
+                if start.found {
+                    var uv = vec2<f32>(0.5);
+                    if HAS_AREA_LIGHTS {
+                        uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
+                    }
+                    let ls = sample_light(light, start.position, uv);
+                    if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
+                        traced += 1u;
+                        if !occluded(start, ls.to_light, ls.distance) {
+                            to_light = ls.to_light;
+                            falloff = ls.falloff;
+                        }
+                    }
+                }
+                let entry = base + k - first;
+                textureStore(queue, queue_texel(entry, 0u), vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff)));
+            }
+            k++;
+        }
+    }
+    return traced;
 }

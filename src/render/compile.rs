@@ -559,6 +559,25 @@ pub struct Settings {
     pub pixel_jitter: bool,
     /// Arbitrary output variables are written.
     pub aov: bool,
+    /// One chunk holds every light sample of a pixel
+    /// ([`super::tiles::TilePlan::chunks`]): the hit stage queues the light
+    /// samples and traces their shadow rays from the hit it has in registers,
+    /// instead of a shadow stage reading the hit records back.
+    pub fused_shadows: bool,
+}
+
+impl Settings {
+    /// The settings of a render at `spp` samples per pixel, with or without
+    /// AOVs, of a scene with `light_samples` light samples per pixel.
+    pub fn new(spp: u32, aov: bool, light_samples: u32) -> Settings {
+        Settings {
+            // Pixel jitter is compiled in only when there is more than one
+            // sample.
+            pixel_jitter: spp > 1,
+            aov,
+            fused_shadows: super::tiles::one_chunk(light_samples),
+        }
+    }
 }
 
 /// What a stage is specialised to, and cached by (with its files' text):
@@ -574,8 +593,12 @@ pub struct StageKernel {
 }
 
 /// The WGSL `override` for each render setting, as in `shaders/render.wgsl`.
-pub fn setting_values(s: &Settings) -> [(&'static str, bool); 2] {
-    [("PIXEL_JITTER", s.pixel_jitter), ("HAS_AOV", s.aov)]
+pub fn setting_values(s: &Settings) -> [(&'static str, bool); 3] {
+    [
+        ("PIXEL_JITTER", s.pixel_jitter),
+        ("HAS_AOV", s.aov),
+        ("FUSED_SHADOWS", s.fused_shadows),
+    ]
 }
 
 /// The WGSL `override`s of the kernel options (besides the features' and

@@ -297,6 +297,9 @@ pub struct Renderer {
     traversal_generation: u64,
     /// Time each pipeline of a frame on its own (benchmarks).
     profile_stages: bool,
+    /// Whether the hit stage may trace the shadow rays of one-chunk frames
+    /// ([`Renderer::set_fused_shadows`]).
+    fuse_shadows: bool,
     /// Set by a successful [`Renderer::reload_shaders`], cleared by an
     /// upload: renders may then reuse the hit records they find (every other
     /// render traces its rays, and counts them).
@@ -389,6 +392,7 @@ impl Renderer {
             traversal_generation: 0,
             reuse_hits: false,
             profile_stages: false,
+            fuse_shadows: true,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             band_bytes: u64::MAX,
@@ -411,6 +415,14 @@ impl Renderer {
     /// slower than one submission of the whole chain).
     pub fn set_profile_stages(&mut self, on: bool) {
         self.profile_stages = on;
+    }
+
+    /// Whether the hit stage traces the shadow rays when one chunk holds
+    /// every light sample of a pixel ([`Settings::fused_shadows`]; on by
+    /// default). Off, the shadow stage runs as for several chunks: the same
+    /// image, bit for bit (tests, and benchmarks of the fusion).
+    pub fn set_fused_shadows(&mut self, on: bool) {
+        self.fuse_shadows = on;
     }
 
     /// Sets the bound on one tile's stage memory (at least
@@ -618,7 +630,7 @@ impl Renderer {
         reload: bool,
     ) -> Result<Compiled, RenderError> {
         let mut done = Compiled::default();
-        for stage in Stage::FRAME {
+        for &stage in Stage::frame(&kernel.settings) {
             done.add(self.stage_pipeline(stage, kernel, reload)?);
         }
         for program in &scene.materials.programs {
@@ -1040,11 +1052,8 @@ impl Renderer {
                 message: format!("must be in 1..={MAX_SPP}, got {}", sampling.spp),
             });
         }
-        // Pixel jitter is compiled in only when there is more than one sample.
-        let settings = Settings {
-            pixel_jitter: sampling.spp > 1,
-            aov: with_aovs,
-        };
+        let mut settings = Settings::new(sampling.spp, with_aovs, scene.light_samples);
+        settings.fused_shadows &= self.fuse_shadows;
         // The BVH buffers are empty for a scene uploaded for brute force.
         let key_kernel = KernelOptions {
             accel: scene.kernel.accel,
@@ -1086,6 +1095,8 @@ impl Renderer {
         let kept = self.stage_buffers_for(plan)?;
         let tiles = bands.tiles(&plan);
         let chunks = plan.chunks();
+        let fused = settings.fused_shadows;
+        debug_assert!(!fused || chunks.len() == 1);
         // Hit records survive a shading edit: with one tile and one chunk,
         // the buffers still hold this exact frame's hits and visibility.
         let reusable = tiles.len() == 1 && chunks.len() == 1 && end_pass - first_pass == 1;
@@ -1169,7 +1180,8 @@ impl Renderer {
         let mut passes = 0;
         let light_count = scene.light_count();
         // Per pipeline: the engine stages, then the shade programs.
-        let engine = Stage::FRAME.len();
+        let engine_stages = Stage::frame(&settings);
+        let engine = engine_stages.len();
         let mut stage_times = vec![Duration::ZERO; engine + programs.len()];
         while first_pass + passes < end_pass {
             let base = PushConstants {
@@ -1219,8 +1231,18 @@ impl Renderer {
                         tile_width: plan.tile[0],
                         ..base
                     };
+                    // With fused shadows the hit stage queues the one
+                    // chunk's samples, so it reads the chunk's bounds.
                     if !reuse {
-                        pending.push((0, stage(Stage::Hit), band, groups));
+                        let hit = match fused {
+                            true => PushConstants {
+                                sample_first: chunks[0].0,
+                                sample_count: chunks[0].1,
+                                ..band
+                            },
+                            false => band,
+                        };
+                        pending.push((0, stage(Stage::Hit), hit, groups));
                     }
                     for (c, &(first, count)) in chunks.iter().enumerate() {
                         let last = match c + 1 == chunks.len() {
@@ -1233,7 +1255,7 @@ impl Renderer {
                             flags: band.flags | last,
                             ..band
                         };
-                        if !reuse {
+                        if !reuse && !fused {
                             pending.push((1, stage(Stage::Shadow), chunk, groups));
                         }
                         for (i, p) in programs.iter().enumerate() {
@@ -1300,7 +1322,7 @@ impl Renderer {
 
         let stage_times = match self.profile_stages {
             false => Vec::new(),
-            true => Stage::FRAME
+            true => engine_stages
                 .iter()
                 .map(|s| s.name().to_string())
                 .chain(

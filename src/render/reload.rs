@@ -54,9 +54,11 @@ impl Renderer {
         self.reuse_hits = false;
         let old = std::mem::replace(&mut scene.materials, materials);
         // Watch renders one sample per pixel without AOVs.
+        let mut settings = super::Settings::new(1, false, scene.light_samples);
+        settings.fused_shadows &= self.fuse_shadows;
         let key = super::StageKernel {
             features: scene.features,
-            settings: super::Settings::default(),
+            settings,
             options: kernel,
         };
         let compiled = self.frame_pipelines(scene, key, true);

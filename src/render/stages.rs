@@ -8,10 +8,13 @@
 //! resolve each hit's material (checkers pick the leaf shader), the shadow
 //! stage samples the lights and traces each sample's shadow ray, and one
 //! shade pipeline per shader file sums the contributions of the samples that
-//! reach the point and writes the image.
+//! reach the point and writes the image. When one chunk holds every light
+//! sample of a pixel, the hit stage traces the shadow rays itself, from the
+//! hit in its registers, and the shadow stage does not run ([`Stage::frame`]).
 //! Each stage is compiled from only the files it needs, so an edit
 //! recompiles only the stages that include the edited file.
 
+use super::compile::Settings;
 use crate::vulkan::BindingType;
 
 /// Declares the shader file table: each name next to its `include_str!`, so
@@ -106,9 +109,19 @@ pub enum Stage {
 }
 
 impl Stage {
-    /// The engine stages of a frame, in order (the shade pipelines run
+    /// Every engine stage a frame may run, in order (the shade pipelines run
     /// after them, once per chunk of light samples).
     pub const FRAME: [Stage; 2] = [Stage::Hit, Stage::Shadow];
+
+    /// The engine stages a frame with `settings` runs, in order: without the
+    /// shadow stage when the hit stage traces the shadow rays
+    /// ([`Settings::fused_shadows`]).
+    pub fn frame(settings: &Settings) -> &'static [Stage] {
+        match settings.fused_shadows {
+            true => &Stage::FRAME[..1],
+            false => &Stage::FRAME,
+        }
+    }
 
     /// The stage's name in reload reports.
     pub fn name(self) -> &'static str {
@@ -136,6 +149,8 @@ impl Stage {
                 "shading/shader.wgsl",
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
+                "lights.wgsl",
+                "stages/shadow.wgsl",
                 "stages/hit.wgsl",
             ],
             Stage::Shadow => &["lights.wgsl", "stages/shadow.wgsl"],

@@ -27,6 +27,12 @@ pub const DEFAULT_STAGE_MEMORY: u64 = 128 << 20;
 pub const MIN_STAGE_MEMORY: u64 =
     64 * (HIT_RECORD_BYTES + RADIANCE_BYTES + MAX_CHUNK as u64 * QUEUE_ENTRY_BYTES);
 
+/// Whether one chunk holds all of a pixel's `samples` light samples (then
+/// the hit stage traces the shadow rays: `render::Settings::fused_shadows`).
+pub fn one_chunk(samples: u32) -> bool {
+    samples <= MAX_CHUNK
+}
+
 /// How a render's image is cut into tiles and its light samples into chunks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TilePlan {
@@ -140,6 +146,7 @@ mod tests {
                 assert_eq!(covered, size[0] as u64 * size[1] as u64);
                 let chunked: u32 = p.chunks().iter().map(|c| c.1).sum();
                 assert_eq!(chunked, samples);
+                assert_eq!(one_chunk(samples), p.chunks().len() == 1);
             }
         }
     }

@@ -31,6 +31,7 @@ mod preview;
 mod reference;
 mod shading;
 mod shadows;
+mod stages;
 mod textures;
 mod tiles;
 mod user_shaders;

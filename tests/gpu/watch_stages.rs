@@ -169,7 +169,8 @@ fn a_user_shader_edit_recompiles_only_its_shade_pipeline_and_reuses_the_hits() {
 }
 
 /// `fn intersect_sphere`'s distance times a factor just above 1: new code
-/// for the closest-hit and shadow stages, the same image to the eye.
+/// for the hit stage's closest-hit and shadow-ray traversals, the same image
+/// to the eye.
 fn sphere_edited(shaders: &Path, factor: &str) {
     let path = shaders.join("primitives/sphere.wgsl");
     let src = std::fs::read_to_string(&path).unwrap();
@@ -183,7 +184,7 @@ fn sphere_edited(shaders: &Path, factor: &str) {
 }
 
 #[test]
-fn a_traversal_edit_recompiles_hit_and_shadow_and_traces_again() {
+fn a_traversal_edit_recompiles_the_hit_stage_and_traces_again() {
     let fx = Fixture::new();
     let mut w = Running::start(fx.options());
     assert!(w.reloads[0].errors.is_empty(), "{:?}", w.reloads[0].errors);
@@ -196,7 +197,9 @@ fn a_traversal_edit_recompiles_hit_and_shadow_and_traces_again() {
     assert!(r.changes.shaders && !r.changes.scene, "{}", r.line);
     let mut names = r.compile.as_ref().unwrap().recompiled.clone();
     names.sort();
-    assert_eq!(names, ["hit", "shadow"], "{}", r.line);
+    // One chunk holds the scene's light samples, so the hit stage traces
+    // the shadow rays and the frame has no shadow stage to recompile.
+    assert_eq!(names, ["hit"], "{}", r.line);
     assert_eq!(r.stages.len(), 2, "{r:#?}");
     assert!(
         r.stages.iter().all(|s| !s.hits_reused),

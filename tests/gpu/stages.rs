@@ -1,0 +1,99 @@
+//! The stages of a frame (issue 13): when one chunk holds every light
+//! sample of a pixel, the hit stage traces the shadow rays itself and the
+//! shadow stage does not run (`render::Settings::fused_shadows`). The image
+//! must be the one the shadow stage gives, bit for bit: both paths sample
+//! the same lights with the same random numbers from the same hit.
+
+use crate::support;
+
+use penumbra::render::{Frame, Renderer};
+use penumbra::scene::Scene;
+
+/// Restores fusion and unprofiled frames when the test ends, also when it
+/// fails, so that the other tests of this binary are not affected.
+struct Restore<'a>(std::sync::MutexGuard<'a, Renderer>);
+
+impl Drop for Restore<'_> {
+    fn drop(&mut self) {
+        self.0.set_fused_shadows(true);
+        self.0.set_profile_stages(false);
+    }
+}
+
+/// Renders `scene` with fusion on or off, each dispatch timed so that the
+/// frame names the pipelines that ran.
+fn render(r: &mut Restore, scene: &Scene, fused: bool) -> Frame {
+    r.0.set_fused_shadows(fused);
+    r.0.set_profile_stages(true);
+    r.0.render(scene).expect("render")
+}
+
+fn stages(f: &Frame) -> Vec<&str> {
+    f.stage_times
+        .iter()
+        .map(|(name, _)| name.as_str())
+        .collect()
+}
+
+fn bits(f: &Frame) -> Vec<[u32; 4]> {
+    f.image.pixels.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+/// A scene of `scenes/` at `width`×`height`.
+fn scene(file: &str, width: u32, height: u32) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(file);
+    let mut scene = support::load(&path);
+    scene.camera.width = width;
+    scene.camera.height = height;
+    scene.validate().expect("valid");
+    scene
+}
+
+#[test]
+fn fused_shadow_rays_give_the_shadow_stages_image() {
+    // Triangles with vertex normals and a point light; planes, spheres,
+    // checkers and point lights; two area lights of 16 and 8 samples;
+    // textures, normal maps and alpha cut-outs; user shaders.
+    let cases = [
+        "bunny_scene.glb",
+        "showcase.json",
+        "area_lights.json",
+        "textured.json",
+        "shaders.json",
+    ];
+    let mut r = Restore(support::renderer());
+    for file in cases {
+        let scene = scene(file, 160, 120);
+        let fused = render(&mut r, &scene, true);
+        let staged = render(&mut r, &scene, false);
+        let names = stages(&fused);
+        assert_eq!(names[0], "hit", "{file}: {names:?}");
+        assert!(!names.contains(&"shadow"), "{file} fused: {names:?}");
+        assert_eq!(stages(&staged)[..2], ["hit", "shadow"], "{file}");
+        assert_eq!(fused.stats.primary_rays, 160 * 120, "{file}");
+        assert_eq!(fused.stats.shadow_rays, staged.stats.shadow_rays, "{file}");
+        // Every case lights something, so the comparison covers shadow rays.
+        assert!(fused.stats.shadow_rays > 0, "{file}: no shadow rays");
+        let (a, b) = (bits(&fused), bits(&staged));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        assert_eq!(
+            differ, 0,
+            "{file}: {differ} pixels differ without the shadow stage"
+        );
+    }
+}
+
+#[test]
+fn more_samples_than_one_chunk_run_the_shadow_stage() {
+    // 65 + 8 samples of the two area lights: two chunks, so the hit stage
+    // cannot hold them and the shadow stage runs once per chunk.
+    let mut scene = scene("area_lights.json", 64, 48);
+    assert!(scene.lights[0].kind.is_area());
+    scene.lights[0].kind.set_samples(65);
+    let mut r = Restore(support::renderer());
+    let frame = render(&mut r, &scene, true);
+    assert_eq!(stages(&frame)[..2], ["hit", "shadow"]);
+    assert!(frame.stats.shadow_rays > 0);
+}
