@@ -42,6 +42,11 @@ override HAS_AOV: bool = true;
 // One chunk holds every light sample of a pixel: the hit stage traces the
 // shadow rays itself and the shadow stage does not run (stages/shadow.wgsl).
 override FUSED_SHADOWS: bool = true;
+// The stages write their hit records and queue as storage-buffer words over
+// the memory of the texel images the next stage reads (a CPU device:
+// vulkan::Context::stage_words, where a texel store costs several buffer
+// stores), rather than with textureStore.
+override STAGE_WORDS: bool = false;
 
 // Mirrored by render::layout::Globals.
 struct Globals {

@@ -56,6 +56,13 @@ struct Args {
     /// Side B runs the shadow stage even where the hit stage could trace them.
     #[arg(long)]
     b_unfused: bool,
+    /// Side A's stages write their records with texel stores even where
+    /// they could write words (`Renderer::set_stage_words(false)`).
+    #[arg(long)]
+    a_texel_stores: bool,
+    /// Side B's stages write their records with texel stores.
+    #[arg(long)]
+    b_texel_stores: bool,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -68,16 +75,13 @@ fn main() -> anyhow::Result<()> {
         None => ShaderSource::Embedded,
     };
     let mut sides = Vec::new();
+    let a = (args.a_unfused, args.a_texel_stores);
+    let b = (args.b_unfused, args.b_texel_stores);
     let sides_in = [
-        ("A", source(&args.a), args.a_stage_kib, args.a_unfused),
-        (
-            "B",
-            source(&Some(args.b.clone())),
-            args.b_stage_kib,
-            args.b_unfused,
-        ),
+        ("A", source(&args.a), args.a_stage_kib, a),
+        ("B", source(&Some(args.b.clone())), args.b_stage_kib, b),
     ];
-    for (name, dir, stage_kib, unfused) in sides_in {
+    for (name, dir, stage_kib, (unfused, texel_stores)) in sides_in {
         let mut r = Renderer::new(&RendererOptions {
             device: device.clone(),
             shaders: dir,
@@ -87,6 +91,7 @@ fn main() -> anyhow::Result<()> {
             r.set_stage_memory(kib.saturating_mul(1024));
         }
         r.set_fused_shadows(!unfused);
+        r.set_stage_words(!texel_stores);
         let up = r.upload(&scene)?;
         let (w, h) = up.size();
         let t0 = Instant::now();

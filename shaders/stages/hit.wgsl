@@ -7,6 +7,17 @@
 // (stages/shadow.wgsl), from the hit it has in registers.
 
 @group(0) @binding(14) var hit_records_out: texture_storage_2d<rgba32uint, write>;
+// The records' memory as words (STAGE_WORDS: render.wgsl).
+@group(0) @binding(24) var<storage, read_write> hit_record_words: array<vec4<u32>>;
+
+// Writes texel `i` of record `slot`.
+fn store_record(slot: u32, i: u32, value: vec4<u32>) {
+    if STAGE_WORDS {
+        hit_record_words[slot * RECORD_TEXELS + i] = value;
+    } else {
+        textureStore(hit_records_out, record_texel(slot, i), value);
+    }
+}
 
 // Linear RGB; alpha is 1 where a primary ray hit something, else 0.
 @group(0) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
@@ -39,14 +50,14 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         let hit = closest_hit(ray);
         let slot = tile_slot(px);
         if hit.found {
-            textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(bitcast<vec3<u32>>(hit.position), hit.kind));
-            textureStore(hit_records_out, record_texel(slot, 1u), vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
-            textureStore(hit_records_out, record_texel(slot, 2u), vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
-            textureStore(hit_records_out, record_texel(slot, 3u), vec4<u32>(bitcast<vec3<u32>>(-ray.dir), hit.object));
-            textureStore(hit_records_out, record_texel(slot, 4u), vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
+            store_record(slot, 0u, vec4<u32>(bitcast<vec3<u32>>(hit.position), hit.kind));
+            store_record(slot, 1u, vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
+            store_record(slot, 2u, vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
+            store_record(slot, 3u, vec4<u32>(bitcast<vec3<u32>>(-ray.dir), hit.object));
+            store_record(slot, 4u, vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
             resolve_material(slot, hit);
         } else {
-            textureStore(hit_records_out, record_texel(slot, 0u), vec4<u32>(0u, 0u, 0u, KIND_NONE));
+            store_record(slot, 0u, vec4<u32>(0u, 0u, 0u, KIND_NONE));
             var value = vec4<f32>(globals.background, 0.0);
             let at = pixel - push.slot_base;
             if push.pass_index > 0u && (push.flags & FLAG_FRESH) == 0u {

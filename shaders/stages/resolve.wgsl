@@ -4,11 +4,18 @@
 // parameters the shade stage then reads. (A pipeline of its own cost a
 // full-screen pass; see docs/stages.md.)
 
-// Material resolve's result per record (stages/records.wgsl).
+// Material resolve's result per record (stages/records.wgsl), and the same
+// memory as words (STAGE_WORDS).
 @group(0) @binding(16) var resolved: texture_storage_2d<rgba32uint, write>;
+@group(0) @binding(26) var<storage, read_write> resolved_words: array<vec4<u32>>;
 
 fn resolve_material(slot: u32, hit: Hit) {
     let leaf = resolve_shader(hit.shader, hit.position, hit.geometric_normal);
     let node = shader_nodes[leaf];
-    textureStore(resolved, texel(slot), vec4<u32>(leaf, node.program, node.params, 0u));
+    let value = vec4<u32>(leaf, node.program, node.params, 0u);
+    if STAGE_WORDS {
+        resolved_words[slot] = value;
+    } else {
+        textureStore(resolved, texel(slot), value);
+    }
 }

@@ -564,6 +564,10 @@ pub struct Settings {
     /// samples and traces their shadow rays from the hit it has in registers,
     /// instead of a shadow stage reading the hit records back.
     pub fused_shadows: bool,
+    /// The stages write hit records, resolved materials and the queue as
+    /// storage-buffer words over the texel images' memory
+    /// (`vulkan::Context::stage_words`), not with texel stores.
+    pub stage_words: bool,
 }
 
 impl Settings {
@@ -576,6 +580,7 @@ impl Settings {
             pixel_jitter: spp > 1,
             aov,
             fused_shadows: super::tiles::one_chunk(light_samples),
+            stage_words: false,
         }
     }
 }
@@ -593,11 +598,12 @@ pub struct StageKernel {
 }
 
 /// The WGSL `override` for each render setting, as in `shaders/render.wgsl`.
-pub fn setting_values(s: &Settings) -> [(&'static str, bool); 3] {
+pub fn setting_values(s: &Settings) -> [(&'static str, bool); 4] {
     [
         ("PIXEL_JITTER", s.pixel_jitter),
         ("HAS_AOV", s.aov),
         ("FUSED_SHADOWS", s.fused_shadows),
+        ("STAGE_WORDS", s.stage_words),
     ]
 }
 

@@ -300,6 +300,9 @@ pub struct Renderer {
     /// Whether the hit stage may trace the shadow rays of one-chunk frames
     /// ([`Renderer::set_fused_shadows`]).
     fuse_shadows: bool,
+    /// Whether the stages may write their images as words where the device
+    /// allows it ([`Renderer::set_stage_words`]).
+    allow_stage_words: bool,
     /// Set by a successful [`Renderer::reload_shaders`], cleared by an
     /// upload: renders may then reuse the hit records they find (every other
     /// render traces its rays, and counts them).
@@ -393,6 +396,7 @@ impl Renderer {
             reuse_hits: false,
             profile_stages: false,
             fuse_shadows: true,
+            allow_stage_words: true,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             band_bytes: u64::MAX,
@@ -423,6 +427,24 @@ impl Renderer {
     /// image, bit for bit (tests, and benchmarks of the fusion).
     pub fn set_fused_shadows(&mut self, on: bool) {
         self.fuse_shadows = on;
+    }
+
+    /// Whether the stages write hit records, resolved materials and queued
+    /// samples as storage-buffer words over the memory of the texel images
+    /// that the next stage reads ([`Settings::stage_words`]). On by default
+    /// where the device allows it (`vulkan::Context::stage_words`: lavapipe);
+    /// off, they use texel stores: the same image, bit for bit (tests, and
+    /// benchmarks of the difference).
+    pub fn set_stage_words(&mut self, on: bool) {
+        if on != self.allow_stage_words {
+            self.allow_stage_words = on;
+            self.stage_buffers.clear();
+        }
+    }
+
+    /// Whether this renderer's stages write words ([`Renderer::set_stage_words`]).
+    pub fn stage_words(&self) -> bool {
+        self.allow_stage_words && self.context.stage_words()
     }
 
     /// Sets the bound on one tile's stage memory (at least
@@ -664,7 +686,11 @@ impl Renderer {
         let ctx = &self.context;
         let px = plan.pixels();
         let entries = px * plan.chunk as u64;
-        let image = |label: &str, texels: u64| ctx.create_stage_image(label, texels);
+        let words = self.stage_words();
+        let image = |label: &str, texels: u64| match words {
+            true => ctx.create_stage_image_with_words(label, texels),
+            false => ctx.create_stage_image(label, texels),
+        };
         self.stage_buffers.push(StageBuffers {
             plan,
             hits: image("hit records", px * tiles::RECORD_TEXELS)?,
@@ -852,6 +878,11 @@ impl Renderer {
                 "vertex attributes",
                 bytemuck::cast_slice(&gpu.textures.attributes),
             )?,
+            // The stage images' words: placeholders, replaced per render
+            // where the stage images have them.
+            b(ctx.create_buffer("hit record words", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("queue words", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer("resolved words", BufferUsage::Storage, 16)?),
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds
@@ -1054,6 +1085,7 @@ impl Renderer {
         }
         let mut settings = Settings::new(sampling.spp, with_aovs, scene.light_samples);
         settings.fused_shadows &= self.fuse_shadows;
+        settings.stage_words = self.stage_words();
         // The BVH buffers are empty for a scene uploaded for brute force.
         let key_kernel = KernelOptions {
             accel: scene.kernel.accel,
@@ -1144,6 +1176,16 @@ impl Renderer {
         refs[Binding::Queue as usize] = (&buffers.queue).into();
         refs[Binding::Resolved as usize] = (&buffers.resolved).into();
         refs[Binding::Radiance as usize] = (&buffers.radiance).into();
+        let words = [
+            (Binding::HitRecordWords, &buffers.hits),
+            (Binding::QueueWords, &buffers.queue),
+            (Binding::ResolvedWords, &buffers.resolved),
+        ];
+        for (binding, image) in words {
+            if let Some(w) = image.words() {
+                refs[binding as usize] = w.into();
+            }
+        }
         // Each band's bindings: its image rows and AOVs.
         let band_refs: Vec<Vec<Resource>> = band_buffers
             .iter()

@@ -244,6 +244,13 @@ pub enum Binding {
     SurfaceMaps,
     /// Each triangle's texture coordinates, colours and tangents (texels).
     Attributes,
+    /// The hit records' memory as a storage buffer, for the stage that
+    /// writes them ([`super::Settings::stage_words`]; a placeholder otherwise).
+    HitRecordWords,
+    /// The queue's memory as a storage buffer.
+    QueueWords,
+    /// The resolved materials' memory as a storage buffer.
+    ResolvedWords,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -262,7 +269,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 24] = {
+pub const BINDINGS: [BindingInfo; 27] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -293,6 +300,13 @@ pub const BINDINGS: [BindingInfo; 24] = {
         b(Binding::TextureUses, "penumbra_texture_uses", TexelImage),
         b(Binding::SurfaceMaps, "penumbra_surface_maps", TexelImage),
         b(Binding::Attributes, "penumbra_attributes", TexelImage),
+        b(
+            Binding::HitRecordWords,
+            "hit_record_words",
+            StorageReadWrite,
+        ),
+        b(Binding::QueueWords, "queue_words", StorageReadWrite),
+        b(Binding::ResolvedWords, "resolved_words", StorageReadWrite),
     ]
 };
 

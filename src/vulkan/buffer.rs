@@ -264,6 +264,40 @@ impl Context {
         Ok((memory, flags))
     }
 
+    /// A storage buffer of `size` bytes (min 16) without memory of its own: the caller binds
+    /// it to the memory of the texel image it aliases ([`Context::create_stage_image_with_words`]),
+    /// which frees that memory.
+    pub(super) fn storage_alias(&self, label: &str, size: u64) -> Result<Buffer, VulkanError> {
+        let size = size.max(16);
+        let limit = self.limits().max_storage_buffer_range;
+        if size > limit {
+            return Err(VulkanError::Limit(format!(
+                "buffer '{label}' needs {} but this device's maxStorageBufferRange is {}",
+                mib(size),
+                mib(limit)
+            )));
+        }
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info; the Buffer value owns the handle (its memory stays null:
+        // freeing a null memory handle is a no-op).
+        let handle = unsafe { self.shared.device.create_buffer(&info, None) }
+            .map_err(vk_err("vkCreateBuffer"))?;
+        Ok(Buffer {
+            shared: self.shared.clone(),
+            handle,
+            memory: vk::DeviceMemory::null(),
+            size,
+            vk_size: size,
+            label: label.to_string(),
+            role: Role::Device(BufferUsage::Storage),
+            mapped: None,
+            coherent: true,
+        })
+    }
+
     /// Checks limits, then creates a buffer of `size` bytes (min 16) with dedicated memory.
     fn allocate(&self, label: &str, role: Role, size: u64) -> Result<Buffer, VulkanError> {
         let size = size.max(16);

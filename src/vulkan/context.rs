@@ -341,8 +341,15 @@ pub struct Context {
     /// What the device can do with texel images' format in optimal tiling (Vulkan makes
     /// storage-image use of `R32G32B32A32_UINT` mandatory; checked all the same).
     pub(crate) texel_format_features: vk::FormatFeatureFlags,
+    /// Whether stage images can be linear images aliased by storage buffers
+    /// ([`Context::stage_words`]), probed at creation.
+    pub(crate) stage_words: bool,
     info: DeviceInfo,
     limits: DeviceLimits,
+}
+
+fn physical_is_cpu(info: &DeviceInfo) -> bool {
+    info.device_type == "CPU"
 }
 
 fn env_flag(name: &str) -> bool {
@@ -397,14 +404,17 @@ impl Context {
         let instance = &shared.instance.instance;
         let memory_properties =
             unsafe { instance.get_physical_device_memory_properties(physical.handle) };
-        let texel_format_features = unsafe {
+        let texel_formats = unsafe {
             instance.get_physical_device_format_properties(
                 physical.handle,
                 vk::Format::R32G32B32A32_UINT,
             )
-        }
-        .optimal_tiling_features;
-        Ok(Context {
+        };
+        let texel_format_features = texel_formats.optimal_tiling_features;
+        let linear_storage = texel_formats
+            .linear_tiling_features
+            .contains(vk::FormatFeatureFlags::STORAGE_IMAGE);
+        let mut context = Context {
             submitter: Mutex::new(Submitter {
                 queue,
                 command_pool,
@@ -413,10 +423,17 @@ impl Context {
             memory_properties,
             force_staging: env_flag("PENUMBRA_FORCE_STAGING"),
             texel_format_features,
+            stage_words: false,
             info: physical.info,
             limits: physical.limits,
             shared,
-        })
+        };
+        // Only on CPU devices (lavapipe), where a texel store costs several
+        // buffer stores; a GPU reads linear images more slowly than optimal
+        // ones and writes either fast.
+        context.stage_words =
+            linear_storage && physical_is_cpu(&context.info) && context.probe_stage_words()?;
+        Ok(context)
     }
 
     /// The device this context runs on.

@@ -10,6 +10,7 @@
 //! (`texture_2d`) computes a mip level for each lane, which took most of the gain away.
 //! GPUs read such images through their texture path, long-standing practice for BVH data.
 
+use super::buffer::Buffer;
 use super::context::{Context, DeviceShared};
 use super::{vk_err, VulkanError};
 use ash::vk;
@@ -31,6 +32,8 @@ pub struct TexelImage {
     memory: vk::DeviceMemory,
     texels: u64,
     label: String,
+    /// A storage buffer over the same memory ([`Context::create_stage_image_with_words`]).
+    words: Option<Buffer>,
 }
 
 impl TexelImage {
@@ -48,12 +51,22 @@ impl TexelImage {
     pub fn size(&self) -> u64 {
         rows(self.texels) as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64
     }
+
+    /// The storage buffer over the image's memory, where texel `i` is the
+    /// `i`-th 16 bytes (a stage image made by
+    /// [`Context::create_stage_image_with_words`]), for shaders that write
+    /// the texels as `array<vec4<u32>>`.
+    pub fn words(&self) -> Option<&Buffer> {
+        self.words.as_ref()
+    }
 }
 
 impl Drop for TexelImage {
     fn drop(&mut self) {
         // SAFETY: every submit waits for its fence, so the image is not in use. Null handles
         // (failed creation) are ignored by Vulkan.
+        // The aliasing buffer goes before the memory it is bound to.
+        drop(self.words.take());
         unsafe {
             let device = &self.shared.device;
             device.destroy_image_view(self.view, None);
@@ -92,20 +105,63 @@ impl Context {
                 data.len()
             )));
         }
-        self.texel_image((data.len() / TEXEL_BYTES) as u64, label, Some(data))
+        self.texel_image((data.len() / TEXEL_BYTES) as u64, label, Some(data), false)
     }
 
     /// A texel image of at least `texels` texels whose contents are undefined until a pipeline
     /// writes them (the stages' hit records and queues): no upload, so large ones are cheap.
     pub fn create_stage_image(&self, label: &str, texels: u64) -> Result<TexelImage, VulkanError> {
-        self.texel_image(texels, label, None)
+        self.texel_image(texels, label, None, false)
     }
 
+    /// Whether [`Context::create_stage_image_with_words`] works on this device: a CPU device
+    /// (lavapipe) whose linear `R32G32B32A32_UINT` images can be storage images with rows of
+    /// exactly [`TEXEL_ROW`] texels, so that a storage buffer over the same memory holds texel
+    /// `i` at bytes `16 i ..`.
+    ///
+    /// Why: lavapipe writes a storage-image texel through a call into the image's store
+    /// function, which costs several per-lane buffer stores, while its image loads are
+    /// straight-line SIMD code (the module docs). A stage then writes its records as words and
+    /// the next stage reads them as texels. Vulkan defines such aliasing for buffers and
+    /// linear images in `GENERAL` layout (host-accessible subresources: "Memory Aliasing").
+    pub fn stage_words(&self) -> bool {
+        self.stage_words
+    }
+
+    /// A stage image as [`Context::create_stage_image`] makes it, plus a storage buffer over
+    /// its memory ([`TexelImage::words`]); fails where [`Context::stage_words`] is false.
+    pub fn create_stage_image_with_words(
+        &self,
+        label: &str,
+        texels: u64,
+    ) -> Result<TexelImage, VulkanError> {
+        if !self.stage_words {
+            return Err(VulkanError::InvalidArgument(format!(
+                "stage image '{label}': this device's stage images cannot be aliased by buffers"
+            )));
+        }
+        self.texel_image(texels, label, None, true)
+    }
+
+    /// Creates a linear one-row texel image and checks its layout for
+    /// [`Context::stage_words`]: offset 0 and a row pitch of exactly one row of texels.
+    pub(crate) fn probe_stage_words(&self) -> Result<bool, VulkanError> {
+        let image = self.texel_image(1, "stage words probe", None, true);
+        match image {
+            Ok(image) => Ok(image.words.is_some()),
+            Err(VulkanError::Limit(_)) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// With `words` (no `data`): a linear image with a storage buffer over its memory when its
+    /// layout is one of whole rows from offset 0, else the linear image alone.
     fn texel_image(
         &self,
         texels: u64,
         label: &str,
         data: Option<&[u8]>,
+        words: bool,
     ) -> Result<TexelImage, VulkanError> {
         let height = checked_rows(label, texels, self.limits().max_image_dimension_2d)?;
         let needed = vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::TRANSFER_DST;
@@ -129,7 +185,10 @@ impl Context {
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
+            .tiling(match words {
+                true => vk::ImageTiling::LINEAR,
+                false => vk::ImageTiling::OPTIMAL,
+            })
             .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
@@ -142,8 +201,27 @@ impl Context {
             memory: vk::DeviceMemory::null(),
             texels,
             label: label.to_string(),
+            words: None,
         };
-        let requirements = unsafe { device.get_image_memory_requirements(image) };
+        let mut requirements = unsafe { device.get_image_memory_requirements(image) };
+        if words {
+            let layout = unsafe {
+                device.get_image_subresource_layout(
+                    image,
+                    vk::ImageSubresource::default().aspect_mask(vk::ImageAspectFlags::COLOR),
+                )
+            };
+            let row = TEXEL_ROW as u64 * TEXEL_BYTES as u64;
+            if layout.offset == 0 && layout.row_pitch == row {
+                let buffer =
+                    self.storage_alias(&format!("{label} (words)"), texels * TEXEL_BYTES as u64)?;
+                let for_buffer = unsafe { device.get_buffer_memory_requirements(buffer.handle) };
+                requirements.size = requirements.size.max(for_buffer.size);
+                requirements.alignment = requirements.alignment.max(for_buffer.alignment);
+                requirements.memory_type_bits &= for_buffer.memory_type_bits;
+                result.words = Some(buffer);
+            }
+        }
         let max_alloc = self.limits().max_memory_allocation_size;
         if requirements.size > max_alloc {
             return Err(VulkanError::Limit(format!(
@@ -162,6 +240,11 @@ impl Context {
         )?;
         unsafe { device.bind_image_memory(image, result.memory, 0) }
             .map_err(vk_err("vkBindImageMemory"))?;
+        if let Some(buffer) = &result.words {
+            // SAFETY: the memory type and size satisfy the buffer's requirements too.
+            unsafe { device.bind_buffer_memory(buffer.handle, result.memory, 0) }
+                .map_err(vk_err("vkBindBufferMemory"))?;
+        }
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)

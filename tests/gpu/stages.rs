@@ -2,7 +2,11 @@
 //! sample of a pixel, the hit stage traces the shadow rays itself and the
 //! shadow stage does not run (`render::Settings::fused_shadows`). The image
 //! must be the one the shadow stage gives, bit for bit: both paths sample
-//! the same lights with the same random numbers from the same hit.
+//! the same lights with the same random numbers from the same hit. On
+//! lavapipe the stages write their records as storage-buffer words over the
+//! memory of the texel images the next stage reads
+//! (`render::Settings::stage_words`); that image must equal the one written
+//! with texel stores, bit for bit.
 
 use crate::support;
 
@@ -16,6 +20,7 @@ struct Restore<'a>(std::sync::MutexGuard<'a, Renderer>);
 impl Drop for Restore<'_> {
     fn drop(&mut self) {
         self.0.set_fused_shadows(true);
+        self.0.set_stage_words(true);
         self.0.set_profile_stages(false);
     }
 }
@@ -26,6 +31,19 @@ fn render(r: &mut Restore, scene: &Scene, fused: bool) -> Frame {
     r.0.set_fused_shadows(fused);
     r.0.set_profile_stages(true);
     r.0.render(scene).expect("render")
+}
+
+/// Renders `scene` with the records written as words or with texel stores.
+fn render_words(r: &mut Restore, scene: &Scene, words: bool) -> Frame {
+    r.0.set_stage_words(words);
+    assert_eq!(
+        r.0.stage_words(),
+        words,
+        "words where the device allows them"
+    );
+    let frame = r.0.render(scene).expect("render");
+    r.0.set_stage_words(true);
+    frame
 }
 
 fn stages(f: &Frame) -> Vec<&str> {
@@ -96,4 +114,34 @@ fn more_samples_than_one_chunk_run_the_shadow_stage() {
     let frame = render(&mut r, &scene, true);
     assert_eq!(stages(&frame)[..2], ["hit", "shadow"]);
     assert!(frame.stats.shadow_rays > 0);
+}
+
+#[test]
+fn records_written_as_words_give_the_texel_stores_image() {
+    let mut r = Restore(support::renderer());
+    // lavapipe's linear images alias buffers; the words are its default.
+    let cpu = r.0.device().device_type == "CPU";
+    assert_eq!(r.0.stage_words(), cpu, "{:?}", r.0.device());
+    // Fused shadows (one chunk) and the shadow stage's queue (two chunks,
+    // its second light's samples across the boundary), with checkers, user
+    // shaders and textures.
+    let mut two_chunks = scene("area_lights.json", 96, 64);
+    two_chunks.lights[0].kind.set_samples(70);
+    let cases = [
+        ("showcase.json", scene("showcase.json", 160, 120)),
+        ("area_lights.json, 78 samples", two_chunks),
+        ("textured.json", scene("textured.json", 160, 120)),
+        ("shaders.json", scene("shaders.json", 160, 120)),
+    ];
+    for (what, scene) in cases {
+        let words = render_words(&mut r, &scene, cpu);
+        let texels = render_words(&mut r, &scene, false);
+        assert!(words.stats.shadow_rays > 0, "{what}: no shadow rays");
+        let (a, b) = (bits(&words), bits(&texels));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        assert_eq!(
+            differ, 0,
+            "{what}: {differ} pixels differ with texel stores"
+        );
+    }
 }

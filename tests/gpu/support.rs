@@ -11,8 +11,8 @@ use penumbra::scene::Scene;
 
 /// One renderer per test binary (tests/gpu: every module's tests): opening
 /// the device and compiling kernels costs far more than the small test
-/// renders. Tests that switch its kernel, stage memory, band cap, shadow fusion or
-/// stage profiling switch them back
+/// renders. Tests that switch its kernel, stage memory, band cap, shadow fusion,
+/// stage words or stage profiling switch them back
 /// before they release the lock; if a test panicked while holding it, the
 /// next caller gets the renderer back with the defaults restored, so that
 /// one failure does not leak its settings into the other modules' tests.
@@ -33,6 +33,7 @@ pub fn renderer() -> std::sync::MutexGuard<'static, Renderer> {
         guard.set_kernel(RendererOptions::default().kernel);
         guard.set_stage_memory(penumbra::render::tiles::DEFAULT_STAGE_MEMORY);
         guard.set_fused_shadows(true);
+        guard.set_stage_words(true);
         guard.set_profile_stages(false);
         guard.set_image_band_bytes(u64::MAX);
         guard.set_texture_capacity(u64::MAX);
