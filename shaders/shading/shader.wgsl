@@ -21,7 +21,19 @@ struct ShaderNode {
     _pad1: u32,
 }
 
-@group(0) @binding(6) var<storage, read> shader_nodes: array<ShaderNode>;
+// Texels, SHADER_NODE_TEXELS a node (shaders/texels.wgsl says why: the
+// resolve walk loads a node at a per-lane index).
+@group(0) @binding(6) var shader_nodes: texture_storage_2d<rgba32uint, read>;
+const SHADER_NODE_TEXELS: u32 = 3u;
+
+// Node `i`, from its texels: the struct's words in order.
+fn shader_node(i: u32) -> ShaderNode {
+    let base = i * SHADER_NODE_TEXELS;
+    let a = textureLoad(shader_nodes, texel(base));
+    let b = textureLoad(shader_nodes, texel(base + 1u));
+    let c = textureLoad(shader_nodes, texel(base + 2u));
+    return ShaderNode(bitcast<vec3<f32>>(a.xyz), bitcast<f32>(a.w), b.x, b.y, b.z, b.w, c.x, c.y, c.z, c.w);
+}
 
 // Walks down nested checkers to the leaf shader at `p` (`n`: the normal
 // facing the viewer); returns its index. Validation rules out cycles; the
@@ -29,10 +41,10 @@ struct ShaderNode {
 fn resolve_shader(id: u32, p: vec3<f32>, n: vec3<f32>) -> u32 {
     var at = id;
     if HAS_CHECKER {
-        var node = shader_nodes[at];
+        var node = shader_node(at);
         for (var depth = 0u; depth < globals.num_shaders && node.kind == SHADER_CHECKER; depth++) {
             at = select(node.odd, node.even, checker_is_even(node, p, n));
-            node = shader_nodes[at];
+            node = shader_node(at);
         }
     }
     return at;

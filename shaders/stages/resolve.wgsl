@@ -11,7 +11,7 @@
 
 fn resolve_material(slot: u32, hit: Hit) {
     let leaf = resolve_shader(hit.shader, hit.position, hit.geometric_normal);
-    let node = shader_nodes[leaf];
+    let node = shader_node(leaf);
     let value = vec4<u32>(leaf, node.program, node.params, 0u);
     if STAGE_WORDS {
         resolved_words[slot] = value;

@@ -844,7 +844,7 @@ impl Renderer {
                 bytemuck::cast_slice(&gpu.vertex_normals),
             )?),
             b(storage("lights", bytemuck::cast_slice(lights))?),
-            b(storage("shaders", bytemuck::cast_slice(&gpu.shaders))?),
+            texels("shaders", bytemuck::cast_slice(&gpu.shaders))?,
             // The image: a placeholder, replaced per render (ImageBands).
             b(ctx.create_buffer("image", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("counters", BufferUsage::Storage, 16)?),

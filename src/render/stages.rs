@@ -208,7 +208,7 @@ pub enum Binding {
     VertexNormals,
     /// Lights.
     Lights,
-    /// The shader table (leaves and checkers).
+    /// The shader table (leaves and checkers; texel image).
     ShaderNodes,
     /// The accumulated image (or the band of it that a dispatch writes).
     Image,
@@ -278,7 +278,7 @@ pub const BINDINGS: [BindingInfo; 27] = {
         b(Binding::Triangles, "triangles", TexelImage),
         b(Binding::VertexNormals, "vertex_normals", StorageReadOnly),
         b(Binding::Lights, "lights", StorageReadOnly),
-        b(Binding::ShaderNodes, "shader_nodes", StorageReadOnly),
+        b(Binding::ShaderNodes, "shader_nodes", TexelImage),
         b(Binding::Image, "image", StorageReadWrite),
         b(Binding::Counters, "counters", StorageReadWrite),
         b(Binding::BvhNodes, "bvh_nodes", TexelImage),

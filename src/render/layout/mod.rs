@@ -464,11 +464,16 @@ mod tests {
                 "TRIANGLE_TEXELS",
                 (std::mem::size_of::<Triangle>() / crate::vulkan::TEXEL_BYTES) as u32,
             ),
+            (
+                "SHADER_NODE_TEXELS",
+                (std::mem::size_of::<ShaderNode>() / crate::vulkan::TEXEL_BYTES) as u32,
+            ),
         ];
         assert!(crate::vulkan::TEXEL_ROW.is_power_of_two());
         for size in [
             std::mem::size_of::<BvhNode>(),
             std::mem::size_of::<Triangle>(),
+            std::mem::size_of::<ShaderNode>(),
         ] {
             assert_eq!(size % crate::vulkan::TEXEL_BYTES, 0, "whole texels");
         }
