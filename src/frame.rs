@@ -172,3 +172,25 @@ pub struct Aovs {
     /// `u32::MAX` on misses.
     pub primitive: Vec<u32>,
 }
+
+/// How samples (pixel jitter, area-light points) are placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Sampler {
+    /// The R2 low-discrepancy sequence with a per-pixel random shift
+    /// (stratified; the default).
+    #[default]
+    Stratified = 0,
+    /// Independent uniform random samples (for comparison).
+    Random = 1,
+}
+
+impl std::str::FromStr for Sampler {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "stratified" => Ok(Sampler::Stratified),
+            "random" => Ok(Sampler::Random),
+            _ => Err(format!("expected `stratified` or `random`, got `{s}`")),
+        }
+    }
+}

@@ -813,12 +813,12 @@ fn render_reference(
 ) -> anyhow::Result<()> {
     let t1;
     let frame = if let Some(set) = aov {
-        let (frame, aovs) = penumbra::reference::render_with_aovs(scene, sampling, kernel);
+        let (frame, aovs) = penumbra::reference::render_with_aovs(scene, sampling, kernel.sampler);
         t1 = Instant::now();
         output::write_exr_with_aovs(out, &frame.image, &aovs, set)?;
         frame
     } else {
-        let frame = penumbra::reference::render(scene, sampling, kernel);
+        let frame = penumbra::reference::render(scene, sampling, kernel.sampler);
         t1 = Instant::now();
         output::write_image(out, &frame.image)?;
         frame

@@ -326,7 +326,7 @@ impl std::str::FromStr for AovSet {
 pub fn write_exr_with_aovs(
     path: &Path,
     image: &Image,
-    aovs: &crate::render::Aovs,
+    aovs: &crate::frame::Aovs,
     set: AovSet,
 ) -> Result<(), OutputError> {
     use exr::prelude::*;

@@ -70,9 +70,8 @@ fn main() -> anyhow::Result<()> {
         ("showcase", "showcase.json", 480, 270),
     ] {
         let scene = load(file, w, h)?;
-        let reference = std::rc::Rc::new(
-            penumbra::reference::render(&scene, &one, &KernelOptions::default()).image,
-        );
+        let reference =
+            std::rc::Rc::new(penumbra::reference::render(&scene, &one, Default::default()).image);
         for (label, kernel) in [
             ("watertight", KernelOptions::default()),
             (
@@ -130,7 +129,7 @@ fn main() -> anyhow::Result<()> {
                     spp: 4,
                     ..Default::default()
                 },
-                &KernelOptions::default(),
+                Default::default(),
             )
             .image,
         )

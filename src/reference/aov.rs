@@ -1,6 +1,6 @@
 //! Arbitrary output variables from the reference: what the primary ray of
 //! each pixel's first pass sees, numbered like the GPU's
-//! ([`crate::render::Aovs`]), in f64 and then rounded once to f32.
+//! ([`crate::frame::Aovs`]), in f64 and then rounded once to f32.
 
 use rayon::prelude::*;
 

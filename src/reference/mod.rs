@@ -35,8 +35,8 @@
 //! [`shadows`]) — the two can differ by a whole colour step on that pixel.
 //! Such pixels are few, and they sit on edges.
 //!
-//! Of [`KernelOptions`] only the sampler is used: it decides where samples
-//! go. The other options choose how the GPU approximates this same image
+//! Of the GPU's kernel options only the [`Sampler`] applies here: it decides
+//! where samples go. The other options choose how the GPU approximates this same image
 //! (BVH or brute force, the triangle test, the shadow-ray offset); the
 //! reference always computes the exact version (watertight test in `f64`,
 //! robust shadow rays), which is what they are measured against.
@@ -65,8 +65,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::frame::{Frame, Image, RenderStats, Sampling, Timings, MAX_SPP};
-use crate::render::{KernelOptions, Sampler};
+use crate::frame::{Aovs, Frame, Image, RenderStats, Sampler, Sampling, Timings, MAX_SPP};
 use crate::scene::{Scene, Shader, Shape};
 
 /// A plane: a point on it and its unit normal.
@@ -282,7 +281,7 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
 /// Renders a validated scene at its camera's size: the mean of
 /// `sampling.spp` passes (fewer if `sampling.time_budget` runs out, checked
 /// after each pass as on the GPU), each one sample per pixel, rows in
-/// parallel. Only `kernel.sampler` is used (see the module docs).
+/// parallel, samples placed by `sampler` (see the module docs).
 ///
 /// The stats count rays as the GPU does (one primary ray per pixel and pass,
 /// one shadow ray per light sample that faces the surface and has a non-zero
@@ -294,7 +293,7 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
 /// If `sampling.spp` is not in `1..=MAX_SPP` (the command line rejects such
 /// values before), or if the scene uses a WGSL shader ([`supports`], which
 /// the command line checks before).
-pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Frame {
+pub fn render(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> Frame {
     assert!(
         (1..=MAX_SPP).contains(&sampling.spp),
         "spp must be in 1..={MAX_SPP}, got {}",
@@ -304,7 +303,7 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
         panic!("{why}");
     }
     let t0 = Instant::now();
-    let world = World::new(scene, kernel.sampler, sampling.seed);
+    let world = World::new(scene, sampler, sampling.seed);
     let accel_build = t0.elapsed();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let jitter = sampling.spp > 1;
@@ -364,12 +363,8 @@ pub fn render(scene: &Scene, sampling: &Sampling, kernel: &KernelOptions) -> Fra
 
 /// [`render`], plus the arbitrary output variables (depth, normal, uv, ids)
 /// of each pixel's first primary ray, numbered like the GPU's.
-pub fn render_with_aovs(
-    scene: &Scene,
-    sampling: &Sampling,
-    kernel: &KernelOptions,
-) -> (Frame, crate::render::Aovs) {
-    let frame = render(scene, sampling, kernel);
-    let world = World::new(scene, kernel.sampler, sampling.seed);
+pub fn render_with_aovs(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> (Frame, Aovs) {
+    let frame = render(scene, sampling, sampler);
+    let world = World::new(scene, sampler, sampling.seed);
     (frame, aov::aovs(&world, scene, sampling))
 }

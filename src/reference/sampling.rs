@@ -11,7 +11,7 @@
 //! Streams: 0 is the pixel jitter (index = pass), `1 + i` is light `i`
 //! (index = pass · samples + j); `pixel` is `y · width + x`.
 
-use crate::render::Sampler;
+use crate::frame::Sampler;
 
 /// 2³² / φ₂ and 2³² / φ₂², rounded (φ₂ the plastic number).
 const R2_A1: u32 = 3_242_174_889;

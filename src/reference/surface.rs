@@ -212,11 +212,11 @@ mod tests {
     use glam::{DMat3, Vec3};
 
     use super::*;
+    use crate::frame::Sampler as Samples;
     use crate::reference::hit;
     use crate::reference::intersect::Ray;
     use crate::reference::sampling::pcg;
     use crate::reference::shading::shade;
-    use crate::render::Sampler as Samples;
     use crate::scene::{
         Camera, Filter, Light, LightKind, Object, Phong, PhongTextures, Plane, Projection, Sampler,
         Scene, Shader, Shape, Texture, Triangle,

@@ -8,6 +8,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::frame::Sampler;
 use crate::scene::Features;
 
 pub use super::stages::SHADER_FILES;
@@ -461,28 +462,6 @@ impl std::hash::Hash for ShadowOffset {
         match self {
             ShadowOffset::Robust => 0u32.hash(h),
             ShadowOffset::Fixed(e) => e.to_bits().hash(h),
-        }
-    }
-}
-
-/// How samples (pixel jitter, area-light points) are placed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Sampler {
-    /// The R2 low-discrepancy sequence with a per-pixel random shift
-    /// (stratified; the default).
-    #[default]
-    Stratified = 0,
-    /// Independent uniform random samples (for comparison).
-    Random = 1,
-}
-
-impl std::str::FromStr for Sampler {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "stratified" => Ok(Sampler::Stratified),
-            "random" => Ok(Sampler::Random),
-            _ => Err(format!("expected `stratified` or `random`, got `{s}`")),
         }
     }
 }

@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use bytemuck::Zeroable;
 
 pub use crate::frame::{
-    Aovs, Frame, Image, PartRange, PassInfo, RenderStats, Sampling, Timings, MAX_SPP,
+    Aovs, Frame, Image, PartRange, PassInfo, RenderStats, Sampler, Sampling, Timings, MAX_SPP,
 };
 use crate::scene::{Features, Scene};
 use crate::vulkan::{
@@ -28,7 +28,7 @@ use crate::vulkan::{
 };
 use bands::ImageBands;
 pub use compile::{
-    Accel, CompileError, KernelOptions, Sampler, Settings, ShaderSource, ShadowOffset, StageKernel,
+    Accel, CompileError, KernelOptions, Settings, ShaderSource, ShadowOffset, StageKernel,
     TriangleTest,
 };
 use layout::{GpuScene, PushConstants, FLAG_FRESH, FLAG_LAST_CHUNK, FLAG_WARM_UP};

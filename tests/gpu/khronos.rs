@@ -62,7 +62,7 @@ fn render_textured_model(rel: &str, width: u32, height: u32, size: (u32, u32)) -
     let kernel = support::renderer().kernel();
     let sampling = penumbra::render::Sampling::default();
     let gpu = support::render_with(&scene, kernel, sampling);
-    let reference = penumbra::reference::render(&scene, &sampling, &kernel);
+    let reference = penumbra::reference::render(&scene, &sampling, kernel.sampler);
     let mut over = 0;
     for (a, b) in gpu.image.pixels.iter().zip(&reference.image.pixels) {
         let d = (0..3)
@@ -315,7 +315,7 @@ fn texture_coordinate_test_is_upright() {
             height: SIZE,
         };
         let gpu = support::render_with(&scene, kernel, sampling);
-        let reference = penumbra::reference::render(&scene, &sampling, &kernel);
+        let reference = penumbra::reference::render(&scene, &sampling, kernel.sampler);
         let n = gpu.image.pixels.len();
         let over = gpu
             .image

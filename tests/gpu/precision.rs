@@ -216,7 +216,7 @@ fn small_spheres_far_away_and_extreme_fields_of_view() {
 /// tests/gpu/reference.rs), and every depth where both saw the same object
 /// within the bound derived in tests/gpu/aov.rs: 64 · 2⁻²⁴ / |n·d|.
 fn check_against_reference(scene: &Scene, what: &str) {
-    use penumbra::render::{KernelOptions, Sampling};
+    use penumbra::render::Sampling;
     let (gpu, gpu_aov) = {
         let mut r = support::renderer();
         let up = r.upload(scene).unwrap();
@@ -224,11 +224,8 @@ fn check_against_reference(scene: &Scene, what: &str) {
         r.render_with_aovs(&up, w, h, &Sampling::default(), &mut |_| {})
             .unwrap()
     };
-    let (reference, ref_aov) = penumbra::reference::render_with_aovs(
-        scene,
-        &Sampling::default(),
-        &KernelOptions::default(),
-    );
+    let (reference, ref_aov) =
+        penumbra::reference::render_with_aovs(scene, &Sampling::default(), Default::default());
     let (frac, worst) = agreement(&reference.image, &gpu.image, 2e-3);
     eprintln!(
         "{what}: {:.3}% of pixels within 2e-3 of the reference, worst {worst}",

@@ -106,7 +106,7 @@ fn gpu_vs_reference(
     sampling: Sampling,
 ) -> (Frame, Frame) {
     let g = support::render_with(scene, kernel, sampling);
-    let r = penumbra::reference::render(scene, &sampling, &kernel);
+    let r = penumbra::reference::render(scene, &sampling, kernel.sampler);
     let a = compare(&g.image, &r.image);
     eprintln!(
         "{label}: {:.4} % of pixels within {TOL} (worst there {:.2e}), worst overall {:.3e}; shadow rays GPU {} / reference {}",
@@ -225,7 +225,7 @@ fn sample_points_match_the_gpu() {
                 seed: seed + 1,
                 ..sampling
             },
-            &kernel,
+            kernel.sampler,
         );
         let a = compare(&g.image, &other.image);
         eprintln!("  other seed: {:.2} % within {TOL}", a.agreeing * 100.0);
@@ -277,8 +277,7 @@ fn bunny_matches_the_gpu() {
 #[test]
 fn bunny_counts_match_embree() {
     let scene = support::tagged_bunny_scene();
-    let frame =
-        penumbra::reference::render(&scene, &Sampling::default(), &KernelOptions::default());
+    let frame = penumbra::reference::render(&scene, &Sampling::default(), Default::default());
     assert_eq!(frame.stats.primary_rays, 1024 * 1024);
     let px = &frame.image.pixels;
     let [bunny, ground, _, ground_dark] = support::bunny_counts(&frame.image);
@@ -336,7 +335,7 @@ fn cli_reference_writes_the_image_and_a_summary() {
         spp: 2,
         ..Default::default()
     };
-    let frame = penumbra::reference::render(&s, &sampling, &KernelOptions::default());
+    let frame = penumbra::reference::render(&s, &sampling, Default::default());
     let expected = dir.path().join("lib.png");
     penumbra::output::write_image(&expected, &frame.image).unwrap();
     assert_eq!(img, image::open(&expected).unwrap().to_rgba8());

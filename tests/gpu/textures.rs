@@ -714,7 +714,7 @@ fn agree(name: &str, s: &Scene, spp: u32) {
         time_budget: None,
     };
     let g = support::render_with(s, kernel, sampling);
-    let r = penumbra::reference::render(s, &sampling, &kernel);
+    let r = penumbra::reference::render(s, &sampling, kernel.sampler);
     let (mut over, mut worst) = (0, 0.0f64);
     for (a, b) in g.image.pixels.iter().zip(&r.image.pixels) {
         let d = (0..3)
