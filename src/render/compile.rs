@@ -764,11 +764,11 @@ mod tests {
                 ],
             ),
             (
-                &[("@binding(3) var triangles", "@binding(24) var triangles")],
+                &[("@binding(3) var triangles", "@binding(40) var triangles")],
                 [
                     "triangle.wgsl:",
                     "`triangles`",
-                    "@binding(24)",
+                    "@binding(40)",
                     "texel image",
                     "binds nothing",
                 ],
