@@ -140,7 +140,14 @@ impl Context {
                 "stage image '{label}': this device's stage images cannot be aliased by buffers"
             )));
         }
-        self.texel_image(texels, label, None, true)
+        let image = self.texel_image(texels, label, None, true)?;
+        if image.words.is_none() {
+            // Shaders compiled for words would write into a placeholder.
+            return Err(VulkanError::Limit(format!(
+                "stage image '{label}': its linear layout is not whole rows of {TEXEL_ROW} texels from offset 0"
+            )));
+        }
+        Ok(image)
     }
 
     /// Creates a linear one-row texel image and checks its layout for
