@@ -1,6 +1,6 @@
 // Stage 1, camera rays and closest hit: one invocation per pixel of the
-// band; writes the pixel's hit record and its resolved material
-// (stages/resolve.wgsl), the background where the ray hit nothing (the shade
+// band; writes the pixel's hit record and, when the scene has checkers, its
+// resolved material (stages/resolve.wgsl), the background where the ray hit nothing (the shade
 // stage writes the other pixels), and, when asked for, the AOVs. With
 // FUSED_SHADOWS (one chunk holds every light sample of a pixel) it also
 // queues the light samples and traces their shadow rays
@@ -55,7 +55,11 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             store_record(slot, 2u, vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
             store_record(slot, 3u, vec4<u32>(bitcast<vec3<u32>>(-ray.dir), hit.object));
             store_record(slot, 4u, vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
-            resolve_material(slot, hit);
+            // Without checkers the shade stage reads the leaf, the hit's own
+            // shader, from the shader table.
+            if HAS_CHECKER {
+                resolve_material(slot, hit);
+            }
         } else {
             store_record(slot, 0u, vec4<u32>(0u, 0u, 0u, KIND_NONE));
             var value = vec4<f32>(globals.background, 0.0);

@@ -27,8 +27,10 @@ const KIND_NONE: u32 = 0xffffffffu;
 //      texture coordinates (surface.wgsl); then the geometric level of
 //      detail of texture coordinate sets 0 and 1 (0 without textures)
 const RECORD_TEXELS: u32 = 5u;
-// Material resolve's result (1 texel a record at binding 16): the leaf
-// shader, its program, the first of its parameter words, 0.
+// Material resolve's result (1 texel a record at binding 16), written only
+// when the scene has checkers (without them the shade stage reads the hit's
+// shader from the shader table): the leaf shader, its program, the first of
+// its parameter words, 0.
 // A queue entry (render::layout::QUEUE_TEXELS texels at binding 15):
 //   0: unit direction to the light, falloff at the point (0: below the
 //      surface or occluded, nothing to add)

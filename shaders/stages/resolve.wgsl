@@ -1,4 +1,6 @@
-// Material resolve, run by the hit stage for each hit: the checker is a
+// Material resolve, run by the hit stage for each hit of a scene with
+// checkers (HAS_CHECKER; without them the leaf is the hit's own shader,
+// which the shade stage looks up itself): the checker is a
 // selector between shaders, so the hit's shader is walked down its (possibly
 // nested) checkers to the leaf shader at the hit point, whose program and
 // parameters the shade stage then reads. (A pipeline of its own cost a

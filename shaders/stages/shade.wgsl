@@ -39,6 +39,11 @@ struct penumbra_PushConstants {
 @group(0) @binding(14) var penumbra_hit_records: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(15) var penumbra_queue: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(16) var penumbra_resolved: texture_storage_2d<rgba32uint, read>;
+// The scene's shader table (shading/shader.wgsl's shader_nodes): without
+// checkers a hit's leaf shader is its own shader, so the shade stage reads
+// the leaf's program and parameters from the table, and the hit stage
+// writes no resolved material.
+@group(0) @binding(6) var penumbra_shader_nodes: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(7) var<storage, read_write> penumbra_image: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> penumbra_radiance: array<vec4<f32>>;
 @group(0) @binding(18) var penumbra_params: texture_storage_2d<rgba32uint, read>;
@@ -66,11 +71,17 @@ const penumbra_FLAG_COLOURS: u32 = 32u;
 override penumbra_HAS_ATTRIBUTES: bool = true;
 override penumbra_HAS_COLOURS: bool = true;
 override penumbra_HAS_EMISSION: bool = true;
+// The scene has checkers (render.wgsl's HAS_CHECKER): only then does the
+// hit stage resolve materials into the resolved texels.
+override penumbra_HAS_CHECKER: bool = true;
 const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
 const penumbra_QUEUE_TEXELS: u32 = 1u;
 const penumbra_TEXEL_ROW_SHIFT: u32 = 12u;
+// shading/shader.wgsl's SHADER_NODE_TEXELS; a node's third texel holds its
+// program and its first parameter word (ShaderNode).
+const penumbra_SHADER_NODE_TEXELS: u32 = 3u;
 
 fn penumbra_texel(i: u32) -> vec2<u32> {
     return vec2<u32>(i & ((1u << penumbra_TEXEL_ROW_SHIFT) - 1u), i >> penumbra_TEXEL_ROW_SHIFT);
@@ -94,12 +105,25 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = local.y * push.tile_width + local.x;
     let r = slot * penumbra_RECORD_TEXELS;
     let t0 = textureLoad(penumbra_hit_records, penumbra_texel(r));
-    let material = textureLoad(penumbra_resolved, penumbra_texel(slot));
-    if t0.w == penumbra_KIND_NONE || material.y != push.program {
+    if t0.w == penumbra_KIND_NONE {
+        return;
+    }
+    let t2 = textureLoad(penumbra_hit_records, penumbra_texel(r + 2u));
+    // The leaf shader's program and first parameter word: material
+    // resolve's, or without checkers the hit's own shader's. (Reading the
+    // table costs less than a resolved texel written by the hit stage and
+    // read back here: docs/stages.md.)
+    var material: vec2<u32>;
+    if penumbra_HAS_CHECKER {
+        material = textureLoad(penumbra_resolved, penumbra_texel(slot)).yz;
+    } else {
+        material = textureLoad(penumbra_shader_nodes, penumbra_texel(t2.w * penumbra_SHADER_NODE_TEXELS + 2u)).xy;
+    }
+    if material.x != push.program {
         return;
     }
     let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
-    let ns = penumbra_f3(textureLoad(penumbra_hit_records, penumbra_texel(r + 2u)));
+    let ns = penumbra_f3(t2);
     let t3 = textureLoad(penumbra_hit_records, penumbra_texel(r + 3u));
     let t4 = textureLoad(penumbra_hit_records, penumbra_texel(r + 4u));
     // Texture coordinates and colour: a triangle's interpolated from its
@@ -122,7 +146,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     penumbra_lod = bitcast<vec2<f32>>(t4.zw);
     let s = Surface(penumbra_f3(t0), ns, penumbra_f3(t1), penumbra_f3(t3), uv, uv1, vertex_colour);
-    let p = penumbra_prepare(s, penumbra_load_params(material.z));
+    let p = penumbra_prepare(s, penumbra_load_params(material.y));
     // The ambient terms with the first chunk of samples, then the samples
     // that reached the point (the shadow stage zeroed the others' falloff).
     var colour: vec3<f32>;

@@ -368,19 +368,8 @@ impl Assembled {
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
-        // The shade stage's overrides (shaders/shading/interface.wgsl,
-        // stages/shade.wgsl; the features of shade::variant): texture
-        // sampling, vertex attributes, vertex colours and emission, each
-        // compiled in only for scenes that have it. Without colours a
-        // point's colour is the constant (1, 1, 1, 1), so a built-in's
-        // prepare() folds away.
-        let f = key.features;
-        for (name, on) in [
-            ("penumbra_HAS_TEXTURES", f.textures),
-            ("penumbra_HAS_ATTRIBUTES", f.attributes),
-            ("penumbra_HAS_COLOURS", f.vertex_colours),
-            ("penumbra_HAS_EMISSION", f.emission),
-        ] {
+        // The shade stage's overrides ([`shade_override_values`]).
+        for (name, on) in shade_override_values(&key.features) {
             let on = on || !kernel.specialise;
             constants.insert(name.into(), if on { 1.0 } else { 0.0 });
         }
@@ -590,6 +579,24 @@ pub fn setting_values(s: &Settings) -> [(&'static str, bool); 4] {
 /// settings'), as in `shaders/render.wgsl`.
 pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPSILON", "SAMPLER"];
 
+/// The shade stage's WGSL `override` for each feature it depends on, as in
+/// `shaders/shading/interface.wgsl` and `shaders/stages/shade.wgsl` (the
+/// features [`super::shade::variant`] keeps): texture sampling, vertex
+/// attributes, vertex colours, emission and checkers, each compiled in only
+/// for scenes that have it. Without colours a point's colour is the
+/// constant (1, 1, 1, 1), so a built-in's `prepare` folds away; without
+/// checkers the shade stage reads a hit's leaf shader from the shader table
+/// instead of a resolved texel.
+pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 5] {
+    [
+        ("penumbra_HAS_TEXTURES", f.textures),
+        ("penumbra_HAS_ATTRIBUTES", f.attributes),
+        ("penumbra_HAS_COLOURS", f.vertex_colours),
+        ("penumbra_HAS_EMISSION", f.emission),
+        ("penumbra_HAS_CHECKER", f.checker),
+    ]
+}
+
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
 pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
     [
@@ -678,6 +685,71 @@ mod tests {
             .collect();
         table.sort();
         assert_eq!(wgsl, table);
+    }
+
+    /// The shade stage's override table names exactly the `override`s its
+    /// WGSL declares, and each stands for the engine override of the same
+    /// feature (`penumbra_` + its name).
+    #[test]
+    fn shade_override_table_matches_the_wgsl() {
+        use crate::render::shade::{assemble, read_program, ProgramFile};
+        let file = ProgramFile::Builtin("shading/phong.wgsl");
+        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+        let module = assemble(&ShaderSource::Embedded, &file, &text)
+            .unwrap()
+            .assembled
+            .parse()
+            .unwrap();
+        let mut wgsl: Vec<String> = module
+            .overrides
+            .iter()
+            .filter_map(|(_, o)| o.name.clone())
+            .collect();
+        wgsl.sort();
+        let mut table: Vec<String> = shade_override_values(&Features::default())
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect();
+        table.sort();
+        assert_eq!(wgsl, table);
+        // Every feature flag of the table maps to the engine's override of
+        // the same feature: set one feature at a time and compare.
+        let engine = |f: &Features| -> Vec<&str> {
+            override_values(f)
+                .into_iter()
+                .filter(|(_, on)| *on)
+                .map(|(n, _)| n)
+                .collect()
+        };
+        for (i, (name, _)) in shade_override_values(&Features::default())
+            .iter()
+            .enumerate()
+        {
+            let mut f = Features::default();
+            match i {
+                0 => f.textures = true,
+                1 => f.attributes = true,
+                2 => f.vertex_colours = true,
+                3 => f.emission = true,
+                _ => f.checker = true,
+            }
+            let on: Vec<&str> = shade_override_values(&f)
+                .into_iter()
+                .filter(|(_, on)| *on)
+                .map(|(n, _)| n)
+                .collect();
+            assert_eq!(on, [*name]);
+            if !matches!(*name, "penumbra_HAS_COLOURS" | "penumbra_HAS_EMISSION") {
+                assert_eq!(engine(&f), [name.strip_prefix("penumbra_").unwrap()]);
+            }
+            // shade::variant keeps the feature, so pipelines of scenes that
+            // differ in it have different keys.
+            assert_ne!(
+                crate::render::shade::variant(&f),
+                crate::render::shade::variant(&Features::default()),
+                "{name}"
+            );
+        }
     }
 
     #[test]

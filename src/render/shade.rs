@@ -35,6 +35,7 @@ pub fn variant(f: &Features) -> Features {
         attributes: f.attributes,
         vertex_colours: f.vertex_colours,
         emission: f.emission,
+        checker: f.checker,
         ..Features::default()
     }
 }

@@ -389,6 +389,7 @@ mod tests {
             "RECORD_TEXELS",
             "QUEUE_TEXELS",
             "TEXEL_ROW_SHIFT",
+            "SHADER_NODE_TEXELS",
         ] {
             assert_eq!(
                 value(&shade, &format!("penumbra_{name}")),
@@ -396,6 +397,10 @@ mod tests {
                 "{name}"
             );
         }
+        // Without checkers the shade stage reads a leaf's program and
+        // first parameter word as the x and y of its node's third texel.
+        assert_eq!(std::mem::offset_of!(ShaderNode, program), 2 * 16);
+        assert_eq!(std::mem::offset_of!(ShaderNode, params), 2 * 16 + 4);
     }
 
     /// Every constant the host and the kernel both use has the same value
