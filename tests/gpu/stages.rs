@@ -145,3 +145,50 @@ fn records_written_as_words_give_the_texel_stores_image() {
         );
     }
 }
+
+#[test]
+fn without_checkers_the_shade_stage_finds_the_leaf_that_resolve_would() {
+    // Without checkers the hit stage writes no resolved material and the
+    // shade stage reads each hit's leaf from the shader table. Two scenes
+    // shade every point alike: shaders.json (built-in and user shaders,
+    // several programs) with its checker floor replaced by the checker's
+    // even leaf, and with a checker whose cells are both that leaf, which
+    // material resolve walks. Their images must agree, bit for bit.
+    use penumbra::scene::Shader;
+    let base = scene("shaders.json", 160, 120);
+    let (at, checker) = base
+        .shaders
+        .iter()
+        .enumerate()
+        .find_map(|(i, s)| match s {
+            Shader::Checker(c) => Some((i, *c)),
+            _ => None,
+        })
+        .expect("shaders.json has a checker");
+    assert!(
+        base.objects.iter().any(|o| o.shader == at),
+        "an object uses the checker"
+    );
+    let mut leaf = base.clone();
+    leaf.shaders[at] = base.shaders[checker.even].clone();
+    let mut walked = base.clone();
+    walked.shaders[at] = Shader::Checker(penumbra::scene::Checker {
+        odd: checker.even,
+        ..checker
+    });
+    leaf.validate().expect("valid");
+    walked.validate().expect("valid");
+    assert!(!leaf.features().checker);
+    assert!(walked.features().checker);
+    let mut r = Restore(support::renderer());
+    let a = render(&mut r, &leaf, true);
+    let b = render(&mut r, &walked, true);
+    assert!(a.stats.shadow_rays > 0, "no shadow rays");
+    // Several shade programs, so a leaf's program decides which pipeline
+    // shades a pixel.
+    let shade = stages(&a).iter().filter(|n| n.starts_with("shade")).count();
+    assert!(shade >= 3, "{:?}", stages(&a));
+    let (x, y) = (bits(&a), bits(&b));
+    let differ = x.iter().zip(&y).filter(|(p, q)| p != q).count();
+    assert_eq!(differ, 0, "{differ} pixels differ between the two paths");
+}
