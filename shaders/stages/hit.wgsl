@@ -1,7 +1,8 @@
 // Stage 1, camera rays and closest hit: one invocation per pixel of the
 // band; writes the pixel's hit record and, when the scene has checkers, its
-// resolved material (stages/resolve.wgsl), the background where the ray hit nothing (the shade
-// stage writes the other pixels), and, when asked for, the AOVs. With
+// resolved material (stages/resolve.wgsl), the background where the ray
+// hit nothing (the shade stage writes the other pixels), and, when asked
+// for, the AOVs. With
 // FUSED_SHADOWS (one chunk holds every light sample of a pixel) it also
 // queues the light samples and traces their shadow rays
 // (stages/shadow.wgsl), from the hit it has in registers.

@@ -665,17 +665,23 @@ mod tests {
         src.compile_frame(f, k)
     }
 
+    /// The names of the `override`s `module` declares, sorted.
+    fn override_names(module: &naga::Module) -> Vec<String> {
+        let mut names: Vec<String> = module
+            .overrides
+            .iter()
+            .filter_map(|(_, o)| o.name.clone())
+            .collect();
+        names.sort();
+        names
+    }
+
     /// The override tables (features, settings, kernel options) name
     /// exactly the `override`s the engine's WGSL declares.
     #[test]
     fn override_tables_match_the_wgsl() {
         let module = ShaderSource::Embedded.assemble().unwrap().parse().unwrap();
-        let mut wgsl: Vec<String> = module
-            .overrides
-            .iter()
-            .filter_map(|(_, o)| o.name.clone())
-            .collect();
-        wgsl.sort();
+        let wgsl = override_names(&module);
         let mut table: Vec<String> = override_values(&Features::default())
             .iter()
             .map(|(n, _)| *n)
@@ -688,24 +694,12 @@ mod tests {
     }
 
     /// The shade stage's override table names exactly the `override`s its
-    /// WGSL declares, and each stands for the engine override of the same
-    /// feature (`penumbra_` + its name).
+    /// WGSL declares; each is on for its own feature only, and where the
+    /// engine has an override of the same feature (its name without
+    /// `penumbra_`) that one is on for the same feature.
     #[test]
     fn shade_override_table_matches_the_wgsl() {
-        use crate::render::shade::{assemble, read_program, ProgramFile};
-        let file = ProgramFile::Builtin("shading/phong.wgsl");
-        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
-        let module = assemble(&ShaderSource::Embedded, &file, &text)
-            .unwrap()
-            .assembled
-            .parse()
-            .unwrap();
-        let mut wgsl: Vec<String> = module
-            .overrides
-            .iter()
-            .filter_map(|(_, o)| o.name.clone())
-            .collect();
-        wgsl.sort();
+        let wgsl = override_names(&crate::render::shade::phong_module());
         let mut table: Vec<String> = shade_override_values(&Features::default())
             .iter()
             .map(|(n, _)| n.to_string())

@@ -342,6 +342,20 @@ impl Materials {
     }
 }
 
+/// The parsed module of the built-in Phong shade pipeline, from the
+/// embedded files: what the layout and override tests read the shade
+/// stage's declarations from.
+#[cfg(test)]
+pub(crate) fn phong_module() -> naga::Module {
+    let file = ProgramFile::Builtin("shading/phong.wgsl");
+    let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+    assemble(&ShaderSource::Embedded, &file, &text)
+        .unwrap()
+        .assembled
+        .parse()
+        .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

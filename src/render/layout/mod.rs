@@ -325,12 +325,7 @@ mod tests {
     /// have the host's layouts too.
     #[test]
     fn shade_stage_mirrors_match_the_host() {
-        use crate::render::shade::{assemble, read_program, ProgramFile};
-        use crate::render::ShaderSource;
-        let file = ProgramFile::Builtin("shading/phong.wgsl");
-        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
-        let source = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
-        let module = source.assembled.parse().unwrap();
+        let module = crate::render::shade::phong_module();
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let layouts = host_layouts();
@@ -356,15 +351,8 @@ mod tests {
     /// The shade stage's copies of engine constants equal the engine's.
     #[test]
     fn shade_stage_constants_match_the_engine() {
-        use crate::render::shade::{assemble, read_program, ProgramFile};
         use crate::render::ShaderSource;
-        let file = ProgramFile::Builtin("shading/phong.wgsl");
-        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
-        let shade = assemble(&ShaderSource::Embedded, &file, &text)
-            .unwrap()
-            .assembled
-            .parse()
-            .unwrap();
+        let shade = crate::render::shade::phong_module();
         let engine = ShaderSource::Embedded.assemble().unwrap().parse().unwrap();
         let value = |m: &naga::Module, name: &str| {
             let (_, c) = m
