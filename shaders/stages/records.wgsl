@@ -9,6 +9,15 @@
 // pixel (lights in scene order, each light's samples in turn) has queue
 // entry `tile_slot(px) * push.sample_count + (k - push.sample_first)`, for
 // the samples of the chunk the queue holds.
+//
+// Slots go block by block: the 64 pixels of each 8×8 block of the tile (one
+// workgroup of every stage) are 64 consecutive slots, the blocks in
+// row-major order. A workgroup then reads and writes one contiguous run of
+// records instead of eight rows a tile row apart, which the cores' prefetch
+// follows (docs/stages.md measures it). The tile width is a multiple of 8
+// (tiles::TilePlan), so the slots stay below the tile's pixel count. The
+// shade stage computes the same slot (stages/shade.wgsl); if the two
+// disagreed, every image test would see the wrong records.
 
 // The kinds of primitive a ray can hit.
 const KIND_PLANE: u32 = 0u;
@@ -47,7 +56,8 @@ const QUEUE_TEXELS: u32 = 1u;
 
 fn tile_slot(px: vec2<u32>) -> u32 {
     let local = px - push.tile_origin;
-    return local.y * push.tile_width + local.x;
+    let block = (local.y >> 3u) * (push.tile_width >> 3u) + (local.x >> 3u);
+    return (block << 6u) | ((local.y & 7u) << 3u) | (local.x & 7u);
 }
 
 // Texel `i` of record `slot`.

@@ -102,7 +102,9 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let local = px - push.tile_origin;
-    let slot = local.y * push.tile_width + local.x;
+    // stages/records.wgsl's tile_slot: block by block, 64 slots an 8×8 block.
+    let block = (local.y >> 3u) * (push.tile_width >> 3u) + (local.x >> 3u);
+    let slot = (block << 6u) | ((local.y & 7u) << 3u) | (local.x & 7u);
     let r = slot * penumbra_RECORD_TEXELS;
     let t0 = textureLoad(penumbra_hit_records, penumbra_texel(r));
     if t0.w == penumbra_KIND_NONE {
