@@ -55,7 +55,9 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             store_record(slot, 1u, vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
             store_record(slot, 2u, vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
             store_record(slot, 3u, vec4<u32>(bitcast<vec3<u32>>(-ray.dir), hit.object));
-            store_record(slot, 4u, vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
+            if record_coords() {
+                store_record(slot, 4u, vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
+            }
             // Without checkers the shade stage reads the leaf, the hit's own
             // shader, from the shader table.
             if HAS_CHECKER {

@@ -34,8 +34,18 @@ const KIND_NONE: u32 = 0xffffffffu;
 //   4: triangles: the barycentrics (u, v), which the shade stage
 //      interpolates vertex attributes with; planes and spheres: their
 //      texture coordinates (surface.wgsl); then the geometric level of
-//      detail of texture coordinate sets 0 and 1 (0 without textures)
+//      detail of texture coordinate sets 0 and 1 (0 without textures);
+//      written and read only where `record_coords()`
 const RECORD_TEXELS: u32 = 5u;
+
+// Whether the records' texel 4 is needed: a scene of triangles without
+// vertex attributes or textures has texture coordinates (0, 0) everywhere
+// and no level of detail to use, so its hit stage stores no texel 4 and
+// its shade stage loads none (the shade stage's penumbra_record_coords is
+// the same test of the same features).
+fn record_coords() -> bool {
+    return HAS_PLANES || HAS_SPHERES || HAS_ATTRIBUTES || HAS_TEXTURES;
+}
 // Material resolve's result (1 texel a record at binding 16), written only
 // when the scene has checkers (without them the shade stage reads the hit's
 // shader from the shader table): the leaf shader, its program, the first of

@@ -74,6 +74,15 @@ override penumbra_HAS_EMISSION: bool = true;
 // The scene has checkers (render.wgsl's HAS_CHECKER): only then does the
 // hit stage resolve materials into the resolved texels.
 override penumbra_HAS_CHECKER: bool = true;
+// The scene has planes or spheres (render.wgsl's HAS_PLANES, HAS_SPHERES):
+// with them, or with attributes or textures, the records have texel 4.
+override penumbra_HAS_PLANES: bool = true;
+override penumbra_HAS_SPHERES: bool = true;
+
+// stages/records.wgsl's record_coords: whether the records have texel 4.
+fn penumbra_record_coords() -> bool {
+    return penumbra_HAS_PLANES || penumbra_HAS_SPHERES || penumbra_HAS_ATTRIBUTES || penumbra_HAS_TEXTURES;
+}
 const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
 const penumbra_RECORD_TEXELS: u32 = 5u;
@@ -127,7 +136,12 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
     let ns = penumbra_f3(t2);
     let t3 = textureLoad(penumbra_hit_records, penumbra_texel(r + 3u));
-    let t4 = textureLoad(penumbra_hit_records, penumbra_texel(r + 4u));
+    // Without texel 4 the coordinates are (0, 0) and there is no texture
+    // to take a level of detail for.
+    var t4 = vec4<u32>();
+    if penumbra_record_coords() {
+        t4 = textureLoad(penumbra_hit_records, penumbra_texel(r + 4u));
+    }
     // Texture coordinates and colour: a triangle's interpolated from its
     // vertices, a plane's or sphere's as the hit stage computed them.
     var uv = bitcast<vec2<f32>>(t4.xy);

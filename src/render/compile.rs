@@ -582,18 +582,22 @@ pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPS
 /// The shade stage's WGSL `override` for each feature it depends on, as in
 /// `shaders/shading/interface.wgsl` and `shaders/stages/shade.wgsl` (the
 /// features [`super::shade::variant`] keeps): texture sampling, vertex
-/// attributes, vertex colours, emission and checkers, each compiled in only
-/// for scenes that have it. Without colours a point's colour is the
-/// constant (1, 1, 1, 1), so a built-in's `prepare` folds away; without
-/// checkers the shade stage reads a hit's leaf shader from the shader table
-/// instead of a resolved texel.
-pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 5] {
+/// attributes, vertex colours, emission, checkers, planes and spheres, each
+/// compiled in only for scenes that have it. Without colours a point's
+/// colour is the constant (1, 1, 1, 1), so a built-in's `prepare` folds
+/// away; without checkers the shade stage reads a hit's leaf shader from the
+/// shader table instead of a resolved texel; without planes, spheres,
+/// attributes and textures the hit records have no texel 4 to load
+/// (`record_coords` in `shaders/stages/records.wgsl`).
+pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
     [
         ("penumbra_HAS_TEXTURES", f.textures),
         ("penumbra_HAS_ATTRIBUTES", f.attributes),
         ("penumbra_HAS_COLOURS", f.vertex_colours),
         ("penumbra_HAS_EMISSION", f.emission),
         ("penumbra_HAS_CHECKER", f.checker),
+        ("penumbra_HAS_PLANES", f.planes),
+        ("penumbra_HAS_SPHERES", f.spheres),
     ]
 }
 
@@ -725,7 +729,9 @@ mod tests {
                 1 => f.attributes = true,
                 2 => f.vertex_colours = true,
                 3 => f.emission = true,
-                _ => f.checker = true,
+                4 => f.checker = true,
+                5 => f.planes = true,
+                _ => f.spheres = true,
             }
             let on: Vec<&str> = shade_override_values(&f)
                 .into_iter()

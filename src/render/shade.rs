@@ -36,6 +36,8 @@ pub fn variant(f: &Features) -> Features {
         vertex_colours: f.vertex_colours,
         emission: f.emission,
         checker: f.checker,
+        planes: f.planes,
+        spheres: f.spheres,
         ..Features::default()
     }
 }
