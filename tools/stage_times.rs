@@ -49,8 +49,15 @@ fn main() -> anyhow::Result<()> {
         .sum();
     let mib = |b: u64| b as f64 / 1048576.0;
     for side in [1024u32, 4096] {
-        let untiled = TilePlan::new([side, side], samples, u64::MAX / 2, u64::MAX / 2);
-        let plan = TilePlan::new([side, side], samples, DEFAULT_STAGE_MEMORY, 128 << 20);
+        let checker = scene.features().checker;
+        let untiled = TilePlan::new([side, side], samples, checker, u64::MAX / 2, u64::MAX / 2);
+        let plan = TilePlan::new(
+            [side, side],
+            samples,
+            checker,
+            DEFAULT_STAGE_MEMORY,
+            128 << 20,
+        );
         println!(
             "{side}x{side}, {samples} light samples per pixel: {:.0} MiB of hit records and queue untiled; {} tiles of {:.1} MiB within the {:.0} MiB bound ({} sample chunks)",
             mib(untiled.bytes()),

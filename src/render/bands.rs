@@ -138,7 +138,7 @@ mod tests {
             ([16384, 9000], true),
             ([1000, 7], false),
         ] {
-            let mut plan = TilePlan::new(size, 4, DEFAULT_STAGE_MEMORY, max);
+            let mut plan = TilePlan::new(size, 4, true, DEFAULT_STAGE_MEMORY, max);
             let bands = ImageBands::plan(size[0], 0..size[1], aovs, &mut plan, max).unwrap();
             let per_pixel = if aovs { 32 } else { 16 };
             let mut next = 0;
@@ -159,7 +159,7 @@ mod tests {
         // 640x360 is one band; 4096² of 16-byte pixels is two, with
         // 32-byte AOVs four.
         let one = |size: [u32; 2], aovs| {
-            let mut plan = TilePlan::new(size, 1, DEFAULT_STAGE_MEMORY, max);
+            let mut plan = TilePlan::new(size, 1, true, DEFAULT_STAGE_MEMORY, max);
             ImageBands::plan(size[0], 0..size[1], aovs, &mut plan, max)
                 .unwrap()
                 .rows
@@ -173,7 +173,7 @@ mod tests {
     #[test]
     fn parts_band_their_own_rows() {
         let max = 128u64 << 20;
-        let mut plan = TilePlan::new([4096, 1000], 1, DEFAULT_STAGE_MEMORY, max);
+        let mut plan = TilePlan::new([4096, 1000], 1, true, DEFAULT_STAGE_MEMORY, max);
         let bands = ImageBands::plan(4096, 3000..4000, false, &mut plan, max).unwrap();
         assert_eq!(bands.rows, vec![3000..4000]);
         assert_eq!(bands.band_of(3999), 0);

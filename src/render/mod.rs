@@ -695,7 +695,9 @@ impl Renderer {
             plan,
             hits: image("hit records", px * tiles::RECORD_TEXELS)?,
             queue: image("queued samples", entries * tiles::QUEUE_TEXELS)?,
-            resolved: image("resolved materials", px)?,
+            // Without checkers nothing reads or writes them; the binding
+            // still needs an image.
+            resolved: image("resolved materials", if plan.resolved { px } else { 1 })?,
             radiance: ctx.create_buffer(
                 "colour sums",
                 BufferUsage::Storage,
@@ -1103,6 +1105,7 @@ impl Renderer {
         let mut plan = TilePlan::new(
             [width, rows.end - rows.start],
             scene.light_samples,
+            scene.features.checker,
             self.stage_memory,
             self.context.limits().max_storage_buffer_range,
         );

@@ -13,8 +13,12 @@
 pub const RECORD_TEXELS: u64 = 5;
 /// Texels of one queued light sample (`QUEUE_TEXELS`).
 pub const QUEUE_TEXELS: u64 = 1;
-/// Bytes of one pixel's hit record and resolved material.
-pub const HIT_RECORD_BYTES: u64 = (RECORD_TEXELS + 1) * 16;
+/// Bytes of one pixel's hit record.
+pub const RECORD_BYTES: u64 = RECORD_TEXELS * 16;
+/// Bytes of one pixel's resolved material (only when the scene has
+/// checkers: without them the shade stage reads a hit's shader from the
+/// shader table).
+pub const RESOLVED_BYTES: u64 = 16;
 /// Bytes of one pixel's colour sum (only when there is more than one chunk).
 pub const RADIANCE_BYTES: u64 = 16;
 /// Bytes of one queued light sample: direction and falloff.
@@ -23,9 +27,10 @@ pub const QUEUE_ENTRY_BYTES: u64 = QUEUE_TEXELS * 16;
 pub const MAX_CHUNK: u32 = 64;
 /// The default bound on a tile's stage memory: 128 MiB.
 pub const DEFAULT_STAGE_MEMORY: u64 = 128 << 20;
-/// The smallest bound a renderer accepts: one 8×8 tile with a full chunk.
+/// The smallest bound a renderer accepts: one 8×8 tile with a full chunk
+/// and resolved materials.
 pub const MIN_STAGE_MEMORY: u64 =
-    64 * (HIT_RECORD_BYTES + RADIANCE_BYTES + MAX_CHUNK as u64 * QUEUE_ENTRY_BYTES);
+    64 * (RECORD_BYTES + RESOLVED_BYTES + RADIANCE_BYTES + MAX_CHUNK as u64 * QUEUE_ENTRY_BYTES);
 
 /// Whether one chunk holds all of a pixel's `samples` light samples (then
 /// the hit stage traces the shadow rays: `render::Settings::fused_shadows`).
@@ -42,16 +47,25 @@ pub struct TilePlan {
     pub samples: u32,
     /// Samples per chunk (the queue holds this many per pixel; at least 1).
     pub chunk: u32,
+    /// Whether each pixel has a resolved material (the scene has checkers).
+    pub resolved: bool,
 }
 
 impl TilePlan {
     /// Plans tiles for an image region of `size` pixels with `samples`
-    /// light samples per pixel, within `bound` bytes of stage memory and
-    /// buffers of at most `max_buffer` bytes each.
-    pub fn new(size: [u32; 2], samples: u32, bound: u64, max_buffer: u64) -> TilePlan {
+    /// light samples per pixel, with a resolved material per pixel where
+    /// `resolved` (the scene has checkers), within `bound` bytes of stage
+    /// memory and buffers of at most `max_buffer` bytes each.
+    pub fn new(
+        size: [u32; 2],
+        samples: u32,
+        resolved: bool,
+        bound: u64,
+        max_buffer: u64,
+    ) -> TilePlan {
         let chunk = samples.clamp(1, MAX_CHUNK);
-        let per_pixel = per_pixel(samples, chunk);
-        let largest = (HIT_RECORD_BYTES).max(chunk as u64 * 16);
+        let per_pixel = per_pixel(samples, chunk, resolved);
+        let largest = RECORD_BYTES.max(chunk as u64 * QUEUE_ENTRY_BYTES);
         let pixels = (bound.max(MIN_STAGE_MEMORY) / per_pixel)
             .min(max_buffer / largest)
             .max(64);
@@ -63,6 +77,7 @@ impl TilePlan {
             tile: [width, height],
             samples,
             chunk,
+            resolved,
         }
     }
 
@@ -73,7 +88,7 @@ impl TilePlan {
 
     /// Bytes of stage memory the plan's buffers take.
     pub fn bytes(&self) -> u64 {
-        self.pixels() * per_pixel(self.samples, self.chunk)
+        self.pixels() * per_pixel(self.samples, self.chunk, self.resolved)
     }
 
     /// Bytes of one tile pixel's colour sum: 0 when one chunk holds all
@@ -110,9 +125,12 @@ impl TilePlan {
 }
 
 /// Stage memory of one pixel for `samples` light samples in chunks of
-/// `chunk`.
-fn per_pixel(samples: u32, chunk: u32) -> u64 {
-    HIT_RECORD_BYTES + radiance_bytes(samples, chunk) + chunk as u64 * QUEUE_ENTRY_BYTES
+/// `chunk`, with a resolved material where `resolved`.
+fn per_pixel(samples: u32, chunk: u32, resolved: bool) -> u64 {
+    RECORD_BYTES
+        + if resolved { RESOLVED_BYTES } else { 0 }
+        + radiance_bytes(samples, chunk)
+        + chunk as u64 * QUEUE_ENTRY_BYTES
 }
 
 /// A pixel's colour sum: only when its samples take more than one chunk.
@@ -129,12 +147,13 @@ mod tests {
 
     #[test]
     fn small_images_are_one_tile_and_the_bound_holds() {
-        let p = TilePlan::new([640, 360], 3, DEFAULT_STAGE_MEMORY, 128 << 20);
+        let p = TilePlan::new([640, 360], 3, true, DEFAULT_STAGE_MEMORY, 128 << 20);
         assert_eq!(p.tiles(640, 0..360).len(), 1);
         assert_eq!(p.chunks(), vec![(0, 3)]);
-        for (size, samples) in [([16384, 16384], 1), ([4096, 4096], 256), ([1, 9000], 1000)] {
+        let sizes = [([16384, 16384], 1), ([4096, 4096], 256), ([1, 9000], 1000)];
+        for ((size, samples), resolved) in sizes.into_iter().flat_map(|s| [(s, false), (s, true)]) {
             for bound in [MIN_STAGE_MEMORY, 1 << 20, DEFAULT_STAGE_MEMORY] {
-                let p = TilePlan::new(size, samples, bound, 128 << 20);
+                let p = TilePlan::new(size, samples, resolved, bound, 128 << 20);
                 assert!(
                     p.bytes() <= bound,
                     "{size:?} {samples} {bound}: {}",
@@ -149,5 +168,14 @@ mod tests {
                 assert_eq!(one_chunk(samples), p.chunks().len() == 1);
             }
         }
+    }
+
+    #[test]
+    fn only_scenes_with_checkers_have_resolved_materials() {
+        // One sample: an 80-byte record and a 16-byte queue entry a pixel,
+        // and 16 bytes more for the resolved material.
+        let untiled = |resolved| TilePlan::new([1024, 1024], 1, resolved, 1 << 40, 1 << 40);
+        assert_eq!(untiled(false).bytes(), 1024 * 1024 * 96);
+        assert_eq!(untiled(true).bytes(), 1024 * 1024 * 112);
     }
 }

@@ -93,7 +93,8 @@ fn many_area_light_samples_in_small_tiles_equal_the_larger_tiles() {
     let (_dir, scene) = big_soft_scene();
     let mut r = Bound(support::renderer());
     let large = r.render(&scene, tiles::DEFAULT_STAGE_MEMORY);
-    // 1 MiB: tiles of about 700 pixels (96 + 16 + 64 × 20 bytes each).
+    // 1 MiB: tiles of under 1000 pixels (a record of 80 bytes, 16 more
+    // with checkers, a colour sum of 16 and 64 queued samples of 16 each).
     let small = r.render(&scene, 1 << 20);
     eprintln!(
         "tiles: {} (default bound, {} bytes), {} (1 MiB, {} bytes); render {:?} / {:?}",
@@ -167,15 +168,20 @@ fn the_bound_holds_for_the_largest_image_the_cli_allows() {
             tiles::DEFAULT_STAGE_MEMORY,
             4 << 30,
         ] {
-            for max_buffer in [128 << 20, u32::MAX as u64] {
-                let plan = TilePlan::new([side, side], samples, bound, max_buffer);
-                let why = format!("{samples} samples, bound {bound}, max buffer {max_buffer}");
+            for (max_buffer, resolved) in [128 << 20, u32::MAX as u64]
+                .into_iter()
+                .flat_map(|m| [(m, false), (m, true)])
+            {
+                let plan = TilePlan::new([side, side], samples, resolved, bound, max_buffer);
+                let why = format!(
+                    "{samples} samples, bound {bound}, max buffer {max_buffer}, resolved {resolved}"
+                );
                 assert!(plan.bytes() <= bound, "{why}: {} bytes", plan.bytes());
                 assert!(plan.tile.iter().all(|t| t.is_multiple_of(8)), "{why}");
                 assert!(plan.chunk >= 1 && plan.chunk <= tiles::MAX_CHUNK, "{why}");
                 // No buffer of the plan is larger than the device allows:
                 // hit records, and queued rays (16 bytes per sample).
-                let largest = tiles::HIT_RECORD_BYTES.max(plan.chunk as u64 * 16);
+                let largest = tiles::RECORD_BYTES.max(plan.chunk as u64 * 16);
                 assert!(plan.pixels() * largest <= max_buffer, "{why}");
                 let covered: u64 = plan
                     .tiles(side, 0..side)
