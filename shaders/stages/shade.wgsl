@@ -50,8 +50,24 @@ struct penumbra_PushConstants {
 @group(0) @binding(19) var penumbra_light_colours: texture_storage_2d<rgba32uint, read>;
 var<immediate> penumbra_push: penumbra_PushConstants;
 
+// camera.wgsl's Camera, the first member of the globals (render.wgsl's
+// Globals, binding 0), all the shade stage reads of them: the direction to
+// the eye, which the records do not hold (stages/records.wgsl).
+struct penumbra_Camera {
+    right: vec3<f32>,
+    orthographic: u32,
+    up: vec3<f32>,
+    _pad0: u32,
+    forward: vec3<f32>,
+    _pad1: u32,
+}
+struct penumbra_Globals {
+    camera: penumbra_Camera,
+}
+@group(0) @binding(0) var<uniform> penumbra_globals: penumbra_Globals;
+
 // render.wgsl's FLAG_WARM_UP, FLAG_FRESH and FLAG_LAST_CHUNK,
-// stages/records.wgsl's KIND_NONE, RECORD_TEXELS
+// stages/records.wgsl's KIND_NONE, KIND_BITS, RECORD_TEXELS
 // and QUEUE_TEXELS, and texels.wgsl's TEXEL_ROW (checked against them by
 // src/render/layout/mod.rs).
 const penumbra_FLAG_WARM_UP: u32 = 1u;
@@ -75,17 +91,18 @@ override penumbra_HAS_EMISSION: bool = true;
 // hit stage resolve materials into the resolved texels.
 override penumbra_HAS_CHECKER: bool = true;
 // The scene has planes or spheres (render.wgsl's HAS_PLANES, HAS_SPHERES):
-// with them, or with attributes or textures, the records have texel 4.
+// with them, or with attributes or textures, the records have texel 3.
 override penumbra_HAS_PLANES: bool = true;
 override penumbra_HAS_SPHERES: bool = true;
 
-// stages/records.wgsl's record_coords: whether the records have texel 4.
+// stages/records.wgsl's record_coords: whether the records have texel 3.
 fn penumbra_record_coords() -> bool {
     return penumbra_HAS_PLANES || penumbra_HAS_SPHERES || penumbra_HAS_ATTRIBUTES || penumbra_HAS_TEXTURES;
 }
 const penumbra_KIND_TRIANGLE: u32 = 2u;
 const penumbra_KIND_NONE: u32 = 0xffffffffu;
-const penumbra_RECORD_TEXELS: u32 = 5u;
+const penumbra_RECORD_TEXELS: u32 = 4u;
+const penumbra_KIND_BITS: u32 = 2u;
 const penumbra_QUEUE_TEXELS: u32 = 1u;
 const penumbra_TEXEL_ROW_SHIFT: u32 = 12u;
 // shading/shader.wgsl's SHADER_NODE_TEXELS; a node's third texel holds its
@@ -103,6 +120,9 @@ fn penumbra_f3(t: vec4<u32>) -> vec3<f32> {
 @compute @workgroup_size(8, 8, 1)
 fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let push = penumbra_push;
+    // Before any branch: lavapipe loads a uniform once per SIMD group only
+    // outside branches and loops (shaders/lights.wgsl's first_light).
+    let camera = penumbra_globals.camera;
     if (push.flags & penumbra_FLAG_WARM_UP) != 0u {
         return;
     }
@@ -135,23 +155,31 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
     let ns = penumbra_f3(t2);
-    let t3 = textureLoad(penumbra_hit_records, penumbra_texel(r + 3u));
-    // Without texel 4 the coordinates are (0, 0) and there is no texture
+    let kind = t0.w & ((1u << penumbra_KIND_BITS) - 1u);
+    let object = t0.w >> penumbra_KIND_BITS;
+    // The camera sits at the origin: a perspective ray left it towards the
+    // point, an orthographic one along the view direction.
+    let position = penumbra_f3(t0);
+    var to_eye = -camera.forward;
+    if camera.orthographic == 0u {
+        to_eye = -normalize(position);
+    }
+    // Without texel 3 the coordinates are (0, 0) and there is no texture
     // to take a level of detail for.
-    var t4 = vec4<u32>();
+    var t3 = vec4<u32>();
     if penumbra_record_coords() {
-        t4 = textureLoad(penumbra_hit_records, penumbra_texel(r + 4u));
+        t3 = textureLoad(penumbra_hit_records, penumbra_texel(r + 3u));
     }
     // Texture coordinates and colour: a triangle's interpolated from its
     // vertices, a plane's or sphere's as the hit stage computed them.
-    var uv = bitcast<vec2<f32>>(t4.xy);
+    var uv = bitcast<vec2<f32>>(t3.xy);
     var uv1 = uv;
     var vertex_colour = vec4<f32>(1.0);
-    if t0.w == penumbra_KIND_TRIANGLE {
+    if kind == penumbra_KIND_TRIANGLE {
         uv = vec2<f32>(0.0);
         uv1 = uv;
         if penumbra_HAS_ATTRIBUTES && (push.flags & penumbra_FLAG_ATTRIBUTES) != 0u {
-            let bary = bitcast<vec2<f32>>(t4.xy);
+            let bary = bitcast<vec2<f32>>(t3.xy);
             let uvs = penumbra_triangle_uvs(t1.w);
             uv = penumbra_triangle_uv(uvs, 0u, bary);
             uv1 = penumbra_triangle_uv(uvs, 1u, bary);
@@ -160,8 +188,8 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    penumbra_lod = bitcast<vec2<f32>>(t4.zw);
-    let s = Surface(penumbra_f3(t0), ns, penumbra_f3(t1), penumbra_f3(t3), uv, uv1, vertex_colour);
+    penumbra_lod = bitcast<vec2<f32>>(t3.zw);
+    let s = Surface(position, ns, penumbra_f3(t1), to_eye, uv, uv1, vertex_colour);
     let p = penumbra_prepare(s, penumbra_load_params(material.y));
     // The ambient terms with the first chunk of samples, then the samples
     // that reached the point (the shadow stage zeroed the others' falloff).
@@ -169,7 +197,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if push.sample_first == 0u {
         colour = penumbra_ambient_sum(s, p);
         if penumbra_HAS_EMISSION && (push.flags & penumbra_FLAG_EMISSION) != 0u {
-            let m = penumbra_surface_map(t3.w, 0u);
+            let m = penumbra_surface_map(object, 0u);
             colour += penumbra_f3(m) * texture_at(m.w, s).rgb;
         }
     } else {

@@ -40,6 +40,13 @@ pub use trace::{HitKind, TraceHit, TraceRay};
 
 /// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
 const TILE: u32 = 8;
+
+/// Bits of a hit record's kind: the rest of its word holds the scene object
+/// (`KIND_BITS` in `shaders/stages/records.wgsl`).
+pub const KIND_BITS: u32 = 2;
+/// Most objects a scene may have: their index shares a word of the hit
+/// record with the kind.
+pub const MAX_OBJECTS: usize = 1 << (32 - KIND_BITS);
 /// Rows per dispatch of [`Renderer::render_cancellable`] (a multiple of
 /// `TILE`, so bands never overlap).
 const BAND_ROWS: u32 = 8 * TILE;
@@ -805,6 +812,15 @@ impl Renderer {
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height, whole)?;
         self.check_textures(scene)?;
+        if scene.objects.len() > MAX_OBJECTS {
+            return Err(RenderError::Scene {
+                field: "objects".into(),
+                message: format!(
+                    "{} objects, more than the {MAX_OBJECTS} a scene may have",
+                    scene.objects.len()
+                ),
+            });
+        }
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let materials =

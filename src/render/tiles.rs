@@ -10,7 +10,7 @@
 
 /// Texels of one hit record (`RECORD_TEXELS` in
 /// `shaders/stages/records.wgsl`).
-pub const RECORD_TEXELS: u64 = 5;
+pub const RECORD_TEXELS: u64 = 4;
 /// Texels of one queued light sample (`QUEUE_TEXELS`).
 pub const QUEUE_TEXELS: u64 = 1;
 /// Bytes of one pixel's hit record.
@@ -172,10 +172,10 @@ mod tests {
 
     #[test]
     fn only_scenes_with_checkers_have_resolved_materials() {
-        // One sample: an 80-byte record and a 16-byte queue entry a pixel,
+        // One sample: a 64-byte record and a 16-byte queue entry a pixel,
         // and 16 bytes more for the resolved material.
         let untiled = |resolved| TilePlan::new([1024, 1024], 1, resolved, 1 << 40, 1 << 40);
-        assert_eq!(untiled(false).bytes(), 1024 * 1024 * 96);
-        assert_eq!(untiled(true).bytes(), 1024 * 1024 * 112);
+        assert_eq!(untiled(false).bytes(), 1024 * 1024 * 80);
+        assert_eq!(untiled(true).bytes(), 1024 * 1024 * 96);
     }
 }

@@ -93,7 +93,7 @@ fn many_area_light_samples_in_small_tiles_equal_the_larger_tiles() {
     let (_dir, scene) = big_soft_scene();
     let mut r = Bound(support::renderer());
     let large = r.render(&scene, tiles::DEFAULT_STAGE_MEMORY);
-    // 1 MiB: tiles of under 1000 pixels (a record of 80 bytes, 16 more
+    // 1 MiB: tiles of under 1000 pixels (a record of 64 bytes, 16 more
     // with checkers, a colour sum of 16 and 64 queued samples of 16 each).
     let small = r.render(&scene, 1 << 20);
     eprintln!(

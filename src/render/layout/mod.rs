@@ -322,30 +322,38 @@ mod tests {
     }
 
     /// The shade stage's prefixed mirrors (`shaders/stages/shade.wgsl`)
-    /// have the host's layouts too.
+    /// have the host's layouts too, and its globals begin with the camera
+    /// as the host's do.
     #[test]
     fn shade_stage_mirrors_match_the_host() {
         let module = crate::render::shade::phong_module();
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let layouts = host_layouts();
-        let name = "PushConstants";
-        let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
-        let prefixed = format!("penumbra_{name}");
-        let (_, ty) = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(prefixed.as_str()))
-            .unwrap_or_else(|| panic!("{prefixed} not in shade.wgsl"));
-        let naga::TypeInner::Struct { members, span } = &ty.inner else {
-            panic!("{prefixed} is not a struct");
+        let members_of = |name: &str| {
+            let (_, ty) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("{name} not in shade.wgsl"));
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                panic!("{name} is not a struct");
+            };
+            let wgsl: Vec<(&str, usize)> = members
+                .iter()
+                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
+                .collect();
+            (*span as usize, wgsl)
         };
-        assert_eq!(*span as usize, *size, "{prefixed}: size");
-        let wgsl: Vec<(&str, usize)> = members
-            .iter()
-            .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
-            .collect();
-        assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
+        for name in ["PushConstants", "Camera"] {
+            let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
+            let prefixed = format!("penumbra_{name}");
+            let (span, wgsl) = members_of(&prefixed);
+            assert_eq!(span, *size, "{prefixed}: size");
+            assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
+        }
+        let (_, wgsl) = members_of("penumbra_Globals");
+        assert_eq!(wgsl, [("camera", offset_of!(Globals, camera))]);
     }
 
     /// The shade stage's copies of engine constants equal the engine's.
@@ -374,6 +382,7 @@ mod tests {
             "FLAG_COLOURS",
             "KIND_TRIANGLE",
             "KIND_NONE",
+            "KIND_BITS",
             "RECORD_TEXELS",
             "QUEUE_TEXELS",
             "TEXEL_ROW_SHIFT",
@@ -447,6 +456,7 @@ mod tests {
             ("LIGHT_SPHERE", LIGHT_SPHERE),
             ("TEXEL_ROW", crate::vulkan::TEXEL_ROW),
             ("RECORD_TEXELS", super::super::tiles::RECORD_TEXELS as u32),
+            ("KIND_BITS", super::super::KIND_BITS),
             ("QUEUE_TEXELS", super::super::tiles::QUEUE_TEXELS as u32),
             ("TEXEL_ROW_SHIFT", crate::vulkan::TEXEL_ROW.trailing_zeros()),
             (
