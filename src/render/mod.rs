@@ -47,6 +47,17 @@ pub const KIND_BITS: u32 = 2;
 /// Most objects a scene may have: their index shares a word of the hit
 /// record with the kind.
 pub const MAX_OBJECTS: usize = 1 << (32 - KIND_BITS);
+
+/// Refuses a scene of more than [`MAX_OBJECTS`] objects, naming the field.
+fn check_objects(n: usize) -> Result<(), RenderError> {
+    if n > MAX_OBJECTS {
+        return Err(RenderError::Scene {
+            field: "objects".into(),
+            message: format!("{n} objects, more than the {MAX_OBJECTS} a scene may have"),
+        });
+    }
+    Ok(())
+}
 /// Rows per dispatch of [`Renderer::render_cancellable`] (a multiple of
 /// `TILE`, so bands never overlap).
 const BAND_ROWS: u32 = 8 * TILE;
@@ -812,15 +823,7 @@ impl Renderer {
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height, whole)?;
         self.check_textures(scene)?;
-        if scene.objects.len() > MAX_OBJECTS {
-            return Err(RenderError::Scene {
-                field: "objects".into(),
-                message: format!(
-                    "{} objects, more than the {MAX_OBJECTS} a scene may have",
-                    scene.objects.len()
-                ),
-            });
-        }
+        check_objects(scene.objects.len())?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let materials =
@@ -1486,4 +1489,26 @@ fn light_colours(lights: &[layout::Light]) -> Vec<[u32; 4]> {
             ]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every object index of a scene that passes the check fits beside any
+    /// kind (0 to 2) without making the word KIND_NONE (all bits set); one
+    /// object more is refused with the field named.
+    #[test]
+    fn object_indices_share_the_record_word_with_the_kind() {
+        let last = (MAX_OBJECTS - 1) as u32;
+        for kind in 0..3u32 {
+            let word = kind | (last << KIND_BITS);
+            assert_ne!(word, u32::MAX);
+            assert_eq!(word >> KIND_BITS, last);
+            assert_eq!(word & ((1 << KIND_BITS) - 1), kind);
+        }
+        assert!(check_objects(MAX_OBJECTS).is_ok());
+        let e = check_objects(MAX_OBJECTS + 1).unwrap_err().to_string();
+        assert!(e.starts_with("objects: "), "{e}");
+    }
 }
