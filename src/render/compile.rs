@@ -763,8 +763,6 @@ mod tests {
             directional_lights: true,
             point_lights: true,
             spot_lights: true,
-            phong: true,
-            blinn_phong: true,
             checker: true,
             area_lights: true,
             textures: true,
@@ -865,7 +863,6 @@ mod tests {
         let f = Features {
             triangles: true,
             directional_lights: true,
-            phong: true,
             ..Default::default()
         };
         let overrides = compile(&src, &f, &KernelOptions::default()).unwrap();

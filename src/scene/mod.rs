@@ -88,10 +88,6 @@ pub struct Features {
     pub spot_lights: bool,
     /// An area light (rectangle or sphere): light sampling is compiled in.
     pub area_lights: bool,
-    /// A Phong shader is reachable.
-    pub phong: bool,
-    /// A Blinn-Phong shader is reachable.
-    pub blinn_phong: bool,
     /// A checker shader is reachable.
     pub checker: bool,
     /// Something samples a texture: primary hits compute their level of
@@ -170,8 +166,9 @@ impl Scene {
                 continue;
             }
             match &self.shaders[id] {
-                Shader::Phong(_) => f.phong = true,
-                Shader::BlinnPhong(_) => f.blinn_phong = true,
+                // Built-in lobes are shade pipelines of their own (shaders/shading/),
+                // so no stage kernel is specialised to them.
+                Shader::Phong(_) | Shader::BlinnPhong(_) => {}
                 Shader::Checker(c) => {
                     f.checker = true;
                     todo.extend([c.even, c.odd]);

@@ -98,9 +98,9 @@ fn a_wgsl_shader_loads_with_its_params_packed_in_field_order() {
     assert_eq!(w.words(|_| u32::MAX), expected);
     // The watcher reloads when the shader file changes.
     assert_eq!(loaded.files, vec![path, dir.path().join("toon.wgsl")]);
-    // A WGSL shader is no built-in kernel feature.
+    // A WGSL shader is no kernel feature (it is a shade pipeline of its own).
     let f = loaded.scene.features();
-    assert!(!f.phong && !f.blinn_phong && !f.checker);
+    assert!(!f.checker);
 }
 
 #[test]
