@@ -1496,8 +1496,10 @@ mod tests {
     use super::*;
 
     /// Every object index of a scene that passes the check fits beside any
-    /// kind (0 to 2) without making the word KIND_NONE (all bits set); one
-    /// object more is refused with the field named.
+    /// kind (0 to 2: the WGSL's KIND_* constants are checked against the
+    /// kind bits in layout's `shared_constants_match_wgsl`) without making
+    /// the word KIND_NONE (all bits set); one object more is refused with
+    /// the field named.
     #[test]
     fn object_indices_share_the_record_word_with_the_kind() {
         let last = (MAX_OBJECTS - 1) as u32;

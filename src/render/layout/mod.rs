@@ -493,6 +493,25 @@ mod tests {
             };
             assert_eq!(wgsl, host, "{name}");
         }
+        // Every primitive kind fits below the kind bits' all-ones value, so
+        // that no hit's kind-and-object word is KIND_NONE (render::MAX_OBJECTS).
+        let mut kinds = 0;
+        for (_, c) in module.constants.iter() {
+            let Some(name) = c.name.as_deref() else {
+                continue;
+            };
+            if !name.starts_with("KIND_") || name == "KIND_NONE" || name == "KIND_BITS" {
+                continue;
+            }
+            let naga::Expression::Literal(naga::Literal::U32(kind)) =
+                module.global_expressions[c.init]
+            else {
+                panic!("{name} is not a u32 literal");
+            };
+            assert!(kind < (1 << super::super::KIND_BITS) - 1, "{name} = {kind}");
+            kinds += 1;
+        }
+        assert_eq!(kinds, 3, "KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE");
         // PRIM_INDEX masks off exactly the two flag bits.
         let prim_index = module
             .constants
