@@ -48,8 +48,8 @@ fn main() -> anyhow::Result<()> {
         })
         .sum();
     let mib = |b: u64| b as f64 / 1048576.0;
+    let checker = scene.features().checker;
     for side in [1024u32, 4096] {
-        let checker = scene.features().checker;
         let untiled = TilePlan::new([side, side], samples, checker, u64::MAX / 2, u64::MAX / 2);
         let plan = TilePlan::new(
             [side, side],

@@ -42,12 +42,18 @@ const KIND_NONE: u32 = 0xffffffffu;
 // 1.4 % of the bunny frame (docs/stages.md).
 const RECORD_TEXELS: u32 = 4u;
 // The kind is the word's low KIND_BITS bits and the object the rest, so a
-// scene has fewer than 2^30 objects (render::MAX_OBJECTS). No hit has all
+// scene has at most 2^30 objects (render::MAX_OBJECTS). No hit has all
 // bits set: the kinds are 0 to 2.
 const KIND_BITS: u32 = 2u;
 
 fn record_kind_object(kind: u32, object: u32) -> u32 {
     return kind | (object << KIND_BITS);
+}
+
+// The kind in a record's word 0.w: KIND_NONE where the ray hit nothing.
+// (The shade stage decodes the word itself: stages/shade.wgsl.)
+fn record_kind(word: u32) -> u32 {
+    return select(word & ((1u << KIND_BITS) - 1u), KIND_NONE, word == KIND_NONE);
 }
 
 // Whether the records' texel 3 is needed: a scene of triangles without

@@ -155,6 +155,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
     let ns = penumbra_f3(t2);
+    // stages/records.wgsl's kind-and-object word (not KIND_NONE here).
     let kind = t0.w & ((1u << penumbra_KIND_BITS) - 1u);
     let object = t0.w >> penumbra_KIND_BITS;
     // The camera sits at the origin: a perspective ray left it towards the

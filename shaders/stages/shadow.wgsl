@@ -33,7 +33,7 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         let t0 = textureLoad(hit_records, record_texel(slot, 0u));
         var start: Hit;
         start.found = t0.w != KIND_NONE;
-        start.kind = t0.w & ((1u << KIND_BITS) - 1u);
+        start.kind = record_kind(t0.w);
         var shading_normal = vec3<f32>(0.0);
         if start.found {
             let t1 = textureLoad(hit_records, record_texel(slot, 1u));

@@ -290,33 +290,40 @@ mod tests {
         ]
     }
 
+    /// WGSL struct `name` of `module`: its span, its size by naga's
+    /// layouter, and its (member, offset) pairs.
+    fn wgsl_struct<'m>(
+        module: &'m naga::Module,
+        name: &str,
+    ) -> (usize, usize, Vec<(&'m str, usize)>) {
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name} not found in the shaders"));
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{name} is not a struct");
+        };
+        let fields = members
+            .iter()
+            .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
+            .collect();
+        (*span as usize, layouter[handle].size as usize, fields)
+    }
+
     #[test]
     fn host_structs_match_wgsl_layout() {
         let source = crate::render::compile::ShaderSource::Embedded
             .assemble()
             .unwrap();
         let module = naga::front::wgsl::parse_str(&source.text).unwrap();
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).unwrap();
         for (name, size, fields) in host_layouts() {
-            let (handle, ty) = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref() == Some(name))
-                .unwrap_or_else(|| panic!("struct {name} not found in the shaders"));
-            let naga::TypeInner::Struct { members, span } = &ty.inner else {
-                panic!("{name} is not a struct");
-            };
+            let (span, laid_out, wgsl) = wgsl_struct(&module, name);
             // Arrays of these structs stride by the WGSL size, rounded to alignment.
-            assert_eq!(*span as usize, size, "{name}: size");
-            assert_eq!(
-                layouter[handle].size as usize, size,
-                "{name}: layouter size"
-            );
-            let wgsl: Vec<(&str, usize)> = members
-                .iter()
-                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
-                .collect();
+            assert_eq!(span, size, "{name}: size");
+            assert_eq!(laid_out, size, "{name}: layouter size");
             assert_eq!(wgsl, fields, "{name}: members and offsets");
         }
     }
@@ -327,32 +334,15 @@ mod tests {
     #[test]
     fn shade_stage_mirrors_match_the_host() {
         let module = crate::render::shade::phong_module();
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).unwrap();
         let layouts = host_layouts();
-        let members_of = |name: &str| {
-            let (_, ty) = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref() == Some(name))
-                .unwrap_or_else(|| panic!("{name} not in shade.wgsl"));
-            let naga::TypeInner::Struct { members, span } = &ty.inner else {
-                panic!("{name} is not a struct");
-            };
-            let wgsl: Vec<(&str, usize)> = members
-                .iter()
-                .map(|m| (m.name.as_deref().unwrap_or(""), m.offset as usize))
-                .collect();
-            (*span as usize, wgsl)
-        };
         for name in ["PushConstants", "Camera"] {
             let (_, size, fields) = layouts.iter().find(|l| l.0 == name).unwrap();
             let prefixed = format!("penumbra_{name}");
-            let (span, wgsl) = members_of(&prefixed);
-            assert_eq!(span, *size, "{prefixed}: size");
+            let (span, laid_out, wgsl) = wgsl_struct(&module, &prefixed);
+            assert_eq!((span, laid_out), (*size, *size), "{prefixed}: size");
             assert_eq!(&wgsl, fields, "{prefixed}: members and offsets");
         }
-        let (_, wgsl) = members_of("penumbra_Globals");
+        let (_, _, wgsl) = wgsl_struct(&module, "penumbra_Globals");
         assert_eq!(wgsl, [("camera", offset_of!(Globals, camera))]);
     }
 
