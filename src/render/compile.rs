@@ -396,12 +396,12 @@ impl Assembled {
             shader_stage: naga::ShaderStage::Compute,
             entry_point: entry.to_string(),
         };
-        naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).map_err(|e| {
-            CompileError {
+        naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
+            .map(super::spirv::forbid_contraction)
+            .map_err(|e| CompileError {
                 location: "shaders".into(),
                 message: e.to_string(),
-            }
-        })
+            })
     }
 }
 
@@ -786,6 +786,21 @@ mod tests {
                 };
                 let words = compile(&src, &all, &kernel).unwrap();
                 assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
+                // No driver may fuse the kernels' float arithmetic
+                // (render::spirv says why).
+                let key = StageKernel {
+                    features: all,
+                    settings: Settings::default(),
+                    options: kernel,
+                };
+                for stage in super::super::stages::Stage::FRAME {
+                    let words = src.compile_entry(&key, stage.entry_point()).unwrap();
+                    assert_eq!(
+                        super::super::spirv::contractible_results(&words),
+                        0,
+                        "{stage:?}"
+                    );
+                }
                 assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
                 compile(&src, &Features::default(), &kernel).unwrap();
             }

@@ -8,6 +8,7 @@ pub mod layout;
 pub mod quantised_bvh;
 mod reload;
 pub mod shade;
+mod spirv;
 pub mod stages;
 mod texture_edit;
 pub mod tiles;
