@@ -347,7 +347,8 @@ struct WatchArgs {
     /// The preview renders at 1/N of the resolution before the full image (1: no preview).
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     preview: u32,
-    /// Saves closer together than this many milliseconds give one reload.
+    /// Writes closer together than this many milliseconds give one reload (a save that
+    /// closes the file or renames it into place reloads 3 ms after it instead).
     #[arg(long, default_value_t = 30)]
     debounce_ms: u64,
     /// Vulkan device: an index from `penumbra devices`, or part of its name.

@@ -78,7 +78,13 @@ pub struct FileWatcher {
     dirs: BTreeSet<PathBuf>,
     /// Events seen but not yet handed out (by [`FileWatcher::pending`]).
     buffered: Option<Batch>,
-    /// A batch ends after this long without a new event...
+    /// Paths of the buffered batch whose last event did not finish a write
+    /// ([`settles`]).
+    unsettled: HashSet<PathBuf>,
+    /// A batch whose every file has settled ends after this long without a
+    /// new event...
+    settle: Duration,
+    /// ...and one with a file still being written after this long...
     quiet: Duration,
     /// ...or this long after its first event (a file written continuously).
     max_wait: Duration,
@@ -94,6 +100,29 @@ fn is_change(kind: &EventKind) -> bool {
     }
 }
 
+/// Does this event finish writing `path`, so that its content is what the
+/// writer meant? A close after writing (inotify's `CLOSE_WRITE`: an editor
+/// that saves in place, `std::fs::write`) or a rename onto the path (an
+/// editor that saves to a temporary file and renames it over ours). A
+/// create, a modify without a close, a delete or a rename away are the
+/// middle of a save: the batch then waits for the debounce window.
+fn settles(kind: &EventKind, paths: &[PathBuf], path: &Path) -> bool {
+    use notify::event::{ModifyKind, RenameMode};
+    match kind {
+        EventKind::Access(AccessKind::Close(AccessMode::Write)) => true,
+        EventKind::Modify(ModifyKind::Name(RenameMode::To)) => true,
+        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) => {
+            paths.last().is_some_and(|p| p == path)
+        }
+        _ => false,
+    }
+}
+
+/// How long a batch whose files have all settled waits for more events: an
+/// editor or `git checkout` that writes several files in a row writes the
+/// next within this, so they reload together.
+pub const SETTLE: Duration = Duration::from_millis(3);
+
 impl FileWatcher {
     /// Starts watching; `quiet` is the debounce window.
     pub fn new(set: WatchSet, quiet: Duration) -> notify::Result<FileWatcher> {
@@ -108,6 +137,8 @@ impl FileWatcher {
             wanted: HashSet::new(),
             dirs: BTreeSet::new(),
             buffered: None,
+            unsettled: HashSet::new(),
+            settle: SETTLE.min(quiet),
             quiet,
             max_wait: Duration::from_secs(1).max(quiet * 4),
         };
@@ -167,15 +198,20 @@ impl FileWatcher {
             if !is_change(&ev.kind) {
                 continue;
             }
-            for p in ev.paths {
-                if self.wanted.contains(&p) {
+            for p in &ev.paths {
+                if self.wanted.contains(p) {
+                    if settles(&ev.kind, &ev.paths, p) {
+                        self.unsettled.remove(p);
+                    } else {
+                        self.unsettled.insert(p.clone());
+                    }
                     let batch = self.buffered.get_or_insert_with(|| Batch {
                         first_event: now,
                         last_event: now,
                         paths: BTreeSet::new(),
                     });
                     batch.last_event = now;
-                    batch.paths.insert(p);
+                    batch.paths.insert(p.clone());
                     got = true;
                 }
             }
@@ -189,9 +225,11 @@ impl FileWatcher {
         self.buffered.is_some()
     }
 
-    /// Waits for the next batch of changes: returns once the files have been
-    /// quiet for the debounce window (or a second after the first event, if
-    /// they never go quiet), or `None` when `stop` is set.
+    /// Waits for the next batch of changes: returns once every changed file
+    /// has settled (its writer closed it or renamed it into place) and no
+    /// other event came for [`SETTLE`], else once the files have been quiet
+    /// for the debounce window (or a second after the first event, if they
+    /// never go quiet); `None` when `stop` is set.
     pub fn next_batch(&mut self, stop: &AtomicBool) -> Option<Batch> {
         while self.buffered.is_none() {
             if stop.load(Ordering::Relaxed) {
@@ -201,8 +239,13 @@ impl FileWatcher {
         }
         loop {
             let b = self.buffered.as_ref()?;
-            let end = (b.last_event + self.quiet).min(b.first_event + self.max_wait);
+            let wait = match self.unsettled.is_empty() {
+                true => self.settle,
+                false => self.quiet,
+            };
+            let end = (b.last_event + wait).min(b.first_event + self.max_wait);
             if Instant::now() >= end {
+                self.unsettled.clear();
                 return self.buffered.take();
             }
             self.drain(end);

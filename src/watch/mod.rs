@@ -2,8 +2,9 @@
 //!
 //! The loop ([`run`]) watches the scene file, every file it read, and the
 //! shader sources ([`files`]): the engine's (with `--shaders`) and the
-//! user WGSL files the scene refers to; waits for a debounced batch of
-//! changes; rebuilds only what changed ([`stage::Session::apply`]: a shader
+//! user WGSL files the scene refers to; waits for a batch of changes
+//! (until the writers have closed the files, or a debounce window for
+//! files still being written: [`files::FileWatcher::next_batch`]); rebuilds only what changed ([`stage::Session::apply`]: a shader
 //! edit recompiles only the pipelines whose files changed and keeps the
 //! scene upload, and after a shading edit the hit records too; a scene edit
 //! re-uploads and keeps the pipelines unless the scene's features change; a
@@ -57,7 +58,9 @@ pub struct WatchOptions {
     pub serve: Option<SocketAddr>,
     /// The preview's resolution divisor (1: no preview stage).
     pub preview_divisor: u32,
-    /// A burst of saves closer together than this gives one reload.
+    /// A burst of writes closer together than this gives one reload, unless
+    /// every file was closed after its write or renamed into place: the
+    /// reload then starts [`files::SETTLE`] after the last of them.
     pub debounce: Duration,
 }
 

@@ -340,3 +340,56 @@ fn the_watcher_sees_edits_between_stages_and_debounces() {
     assert_eq!(b.paths.into_iter().collect::<Vec<_>>(), [normalise(&a)]);
     assert!(!w.pending(), "five writes, one batch");
 }
+
+/// A save that closes the file (or renames a new file into place) ends its
+/// batch without waiting for the debounce window; a file still open for
+/// writing waits for the window.
+#[test]
+fn a_closed_save_does_not_wait_for_the_debounce_window() {
+    use penumbra::watch::files::{normalise, FileWatcher, WatchSet};
+    use std::io::Write as _;
+    use std::sync::atomic::AtomicBool;
+    use std::time::Instant;
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.wgsl");
+    std::fs::write(&a, "1").unwrap();
+    let set = WatchSet {
+        scene: Default::default(),
+        shaders: [normalise(&a)].into_iter().collect(),
+    };
+    let quiet = Duration::from_millis(1500);
+    let mut w = FileWatcher::new(set, quiet).unwrap();
+    let stop = AtomicBool::new(false);
+    // Written and closed: the batch ends long before the window.
+    let t = Instant::now();
+    std::fs::write(&a, "2").unwrap();
+    let b = w.next_batch(&stop).unwrap();
+    assert_eq!(b.paths.into_iter().collect::<Vec<_>>(), [normalise(&a)]);
+    assert!(
+        t.elapsed() < quiet,
+        "a closed save waited {:?}",
+        t.elapsed()
+    );
+    // A new file renamed over ours: the same.
+    let tmp = dir.path().join("a.wgsl.tmp");
+    std::fs::write(&tmp, "3").unwrap();
+    let t = Instant::now();
+    std::fs::rename(&tmp, &a).unwrap();
+    let b = w.next_batch(&stop).unwrap();
+    assert_eq!(b.paths.into_iter().collect::<Vec<_>>(), [normalise(&a)]);
+    assert!(t.elapsed() < quiet, "a rename waited {:?}", t.elapsed());
+    // Written but still open: the batch waits for the window after the
+    // last write.
+    let mut f = std::fs::OpenOptions::new().append(true).open(&a).unwrap();
+    f.write_all(b"4").unwrap();
+    f.flush().unwrap();
+    let t = Instant::now();
+    let b = w.next_batch(&stop).unwrap();
+    assert_eq!(b.paths.into_iter().collect::<Vec<_>>(), [normalise(&a)]);
+    assert!(
+        t.elapsed() >= quiet - Duration::from_millis(100),
+        "an open file's batch ended after {:?}",
+        t.elapsed()
+    );
+    drop(f);
+}
