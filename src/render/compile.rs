@@ -381,7 +381,7 @@ impl Assembled {
                 .iter()
                 .any(|(_, o)| o.name.as_deref() == Some(name.as_str()))
         });
-        let (module, info) = naga::back::pipeline_constants::process_overrides(
+        let (module, _) = naga::back::pipeline_constants::process_overrides(
             &module,
             &info,
             Some((naga::ShaderStage::Compute, entry)),
@@ -391,6 +391,13 @@ impl Assembled {
             location: "shaders".into(),
             message: e.to_string(),
         })?;
+        // What the overrides switched off goes before the driver sees it
+        // (render::prune says why).
+        let (module, info, _) =
+            super::prune::prune(module.into_owned()).map_err(|e| CompileError {
+                location: "shaders".into(),
+                message: format!("internal error pruning the specialised module: {e}"),
+            })?;
         let options = spirv_options();
         let pipeline = naga::back::spv::PipelineOptions {
             shader_stage: naga::ShaderStage::Compute,

@@ -5,6 +5,7 @@
 pub mod bands;
 pub mod compile;
 pub mod layout;
+mod prune;
 pub mod quantised_bvh;
 mod reload;
 pub mod shade;
