@@ -51,6 +51,22 @@ fn staging_path_round_trip_dispatch_and_renders() {
         .unwrap();
     assert_eq!(ctx.read_buffer(&empty).unwrap(), vec![0u8; 16]);
 
+    // The staging buffers are kept between transfers (vulkan::MAX_KEPT_STAGING): a smaller
+    // upload through the 1 MiB one kept from the pattern gets its own bytes and zeros, never
+    // the pattern's, and a larger one after it gets a new buffer.
+    let short = ctx
+        .create_buffer_with_data("short", BufferUsage::Storage, &[0xab; 10])
+        .unwrap();
+    let mut want = vec![0xab; 10];
+    want.resize(16, 0);
+    assert_eq!(ctx.read_buffer(&short).unwrap(), want);
+    let large = common::pattern(3 << 20);
+    let buffer = ctx
+        .create_buffer_with_data("large", BufferUsage::Storage, &large)
+        .unwrap();
+    assert_eq!(ctx.read_buffer(&buffer).unwrap(), large);
+    assert_eq!(ctx.read_buffer(&short).unwrap(), want);
+
     let run = common::run_kernel(&ctx);
     assert!(!run.input.is_host_visible() && !run.output.is_host_visible());
     assert!(!run.params.is_host_visible());

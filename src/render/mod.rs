@@ -1363,10 +1363,9 @@ impl Renderer {
         let mut aov_bytes = Vec::new();
         for ((image, aovs), band) in band_buffers.iter().zip(&bands.rows) {
             let texels = width as usize * (band.end - band.start) as usize;
-            let bytes = ctx.read_buffer(image)?;
-            pixels.extend(bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(
-                &bytes[..texels * 16],
-            ));
+            let at = pixels.len();
+            pixels.resize(at + texels, [0.0; 4]);
+            ctx.read_buffer_into(image, bytemuck::cast_slice_mut(&mut pixels[at..]))?;
             if let Some(b) = aovs {
                 let size = texels * std::mem::size_of::<layout::Aov>();
                 aov_bytes.extend_from_slice(&ctx.read_buffer(b)?[..size]);

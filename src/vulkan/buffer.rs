@@ -77,12 +77,20 @@ impl Buffer {
 
     /// Writes `data` followed by zeros into the mapped memory.
     fn write_mapped(&self, data: &[u8]) -> Result<(), VulkanError> {
+        self.write_mapped_prefix(data, self.vk_size)
+    }
+
+    /// Writes `data` followed by zeros up to byte `end` (at most the buffer's size) into the
+    /// mapped memory: a kept staging buffer larger than the transfer is written only as far
+    /// as the copy reads.
+    fn write_mapped_prefix(&self, data: &[u8], end: u64) -> Result<(), VulkanError> {
         let ptr = self.mapping()?;
-        let len = data.len().min(self.vk_size as usize);
-        // SAFETY: the mapping covers vk_size bytes and nothing else accesses it right now.
+        let end = end.min(self.vk_size) as usize;
+        let len = data.len().min(end);
+        // SAFETY: the mapping covers vk_size >= end bytes and nothing else accesses it now.
         unsafe {
             std::ptr::copy_nonoverlapping(data.as_ptr(), ptr.as_ptr(), len);
-            std::ptr::write_bytes(ptr.as_ptr().add(len), 0, self.vk_size as usize - len);
+            std::ptr::write_bytes(ptr.as_ptr().add(len), 0, end - len);
         }
         if !self.coherent {
             // Offset 0 + WHOLE_SIZE covers the whole mapping, so nonCoherentAtomSize is respected.
@@ -95,8 +103,9 @@ impl Buffer {
         Ok(())
     }
 
-    /// Copies `len` bytes out of the mapped memory.
-    fn read_mapped(&self, len: u64) -> Result<Vec<u8>, VulkanError> {
+    /// Copies the first `out.len()` bytes (at most the buffer's size) of the mapped memory
+    /// into `out`.
+    fn read_mapped_into(&self, out: &mut [u8]) -> Result<(), VulkanError> {
         let ptr = self.mapping()?;
         if !self.coherent {
             let range = [vk::MappedMemoryRange::default()
@@ -105,8 +114,10 @@ impl Buffer {
             unsafe { self.shared.device.invalidate_mapped_memory_ranges(&range) }
                 .map_err(vk_err("vkInvalidateMappedMemoryRanges"))?;
         }
+        let len = out.len().min(self.vk_size as usize);
         // SAFETY: len <= vk_size, which the mapping covers; the device finished writing.
-        Ok(unsafe { std::slice::from_raw_parts(ptr.as_ptr(), len as usize) }.to_vec())
+        unsafe { std::ptr::copy_nonoverlapping(ptr.as_ptr(), out.as_mut_ptr(), len) };
+        Ok(())
     }
 }
 
@@ -120,6 +131,13 @@ impl Drop for Buffer {
         }
     }
 }
+
+/// The smallest staging buffer allocated.
+const MIN_STAGING: u64 = 64 * 1024;
+
+/// The largest staging buffer kept between transfers (one for uploads, one for readbacks):
+/// larger transfers allocate their own, whose cost is small beside their size.
+pub const MAX_KEPT_STAGING: u64 = 64 * 1024 * 1024;
 
 fn mib(bytes: u64) -> String {
     format!("{:.1} MiB", bytes as f64 / (1024.0 * 1024.0))
@@ -161,13 +179,31 @@ impl Context {
 
     /// Copies the whole buffer back to the host.
     pub fn read_buffer(&self, buffer: &Buffer) -> Result<Vec<u8>, VulkanError> {
+        let mut out = vec![0; buffer.size as usize];
+        self.read_buffer_into(buffer, &mut out)?;
+        Ok(out)
+    }
+
+    /// Copies the first `out.len()` bytes of the buffer into `out`, with no copy in between
+    /// where the host maps the buffer (a frame's image goes straight into its pixels).
+    pub fn read_buffer_into(&self, buffer: &Buffer, out: &mut [u8]) -> Result<(), VulkanError> {
         self.check_owned(buffer)?;
-        if buffer.is_host_visible() {
-            return buffer.read_mapped(buffer.size);
+        if out.len() as u64 > buffer.size {
+            return Err(VulkanError::InvalidArgument(format!(
+                "buffer '{}': reading {} bytes of its {}",
+                buffer.label,
+                out.len(),
+                buffer.size
+            )));
         }
-        let staging = self.allocate(buffer.label(), Role::Readback, buffer.vk_size)?;
+        if buffer.is_host_visible() {
+            return buffer.read_mapped_into(out);
+        }
+        let staging = self.staging(buffer.label(), Role::Readback, buffer.vk_size)?;
         self.copy(buffer, &staging)?;
-        staging.read_mapped(buffer.size)
+        let read = staging.read_mapped_into(out);
+        self.keep_staging(staging);
+        read
     }
 
     /// Rejects buffers created by another context (their handles are invalid on this device).
@@ -185,12 +221,14 @@ impl Context {
         if buffer.is_host_visible() {
             return buffer.write_mapped(data);
         }
-        let staging = self.allocate(buffer.label(), Role::Upload, buffer.vk_size)?;
-        staging.write_mapped(data)?;
-        self.copy(&staging, buffer)
+        let staging = self.upload_buffer(buffer.label(), buffer.vk_size, data)?;
+        self.copy(&staging, buffer)?;
+        self.keep_staging(staging);
+        Ok(())
     }
 
-    /// Copies all of `src` into `dst` (same size) on the queue and waits.
+    /// Copies `src` into `dst` on the queue and waits: as many bytes as the smaller holds
+    /// (a kept staging buffer may be larger than the device buffer).
     fn copy(&self, src: &Buffer, dst: &Buffer) -> Result<(), VulkanError> {
         let region = [vk::BufferCopy::default().size(src.vk_size.min(dst.vk_size))];
         self.submit(|device, cmd| unsafe {
@@ -200,17 +238,64 @@ impl Context {
         Ok(())
     }
 
-    /// A host-visible transfer-source buffer of `size` bytes holding `data` and then zeros, for
-    /// uploads to device memory that cannot be mapped (images in optimal tiling).
+    /// A host-visible transfer-source buffer of at least `size` bytes whose first `size` hold
+    /// `data` and then zeros, for uploads to device memory that cannot be mapped (images in
+    /// optimal tiling). Hand it back with [`Context::keep_staging`] after the copy.
     pub(super) fn upload_buffer(
         &self,
         label: &str,
         size: u64,
         data: &[u8],
     ) -> Result<Buffer, VulkanError> {
-        let staging = self.allocate(label, Role::Upload, size)?;
-        staging.write_mapped(data)?;
+        let staging = self.staging(label, Role::Upload, size)?;
+        staging.write_mapped_prefix(data, size)?;
         Ok(staging)
+    }
+
+    /// A staging buffer of `role` (upload or readback) of at least `size` bytes: the one kept
+    /// from an earlier transfer when it is large enough, else a new one (rounded up to a power
+    /// of two, so that a run of growing transfers allocates a few times, not each time).
+    ///
+    /// Why kept: allocating host memory that a GPU can reach pins its pages, which made a
+    /// fresh staging buffer per transfer cost more than the transfer on a GPU (docs/gpu.md).
+    fn staging(&self, label: &str, role: Role, size: u64) -> Result<Buffer, VulkanError> {
+        let slot = usize::from(role == Role::Readback);
+        let kept = self.staging.lock().unwrap_or_else(|e| e.into_inner())[slot].take();
+        match kept {
+            Some(b) if b.vk_size >= size => Ok(b),
+            other => {
+                // A smaller kept buffer is freed; the new one replaces it when handed back.
+                drop(other);
+                let rounded = size.next_power_of_two().max(MIN_STAGING);
+                let size = if rounded <= MAX_KEPT_STAGING {
+                    rounded
+                } else {
+                    size
+                };
+                self.allocate(&format!("staging for {label}"), role, size)
+            }
+        }
+    }
+
+    /// Hands a staging buffer back after its transfer finished: it is kept for the next
+    /// transfer of its role unless it is larger than [`MAX_KEPT_STAGING`] or a larger one is
+    /// kept already.
+    pub(super) fn keep_staging(&self, buffer: Buffer) {
+        if buffer.vk_size > MAX_KEPT_STAGING {
+            return;
+        }
+        let slot = match buffer.role {
+            Role::Upload => 0,
+            Role::Readback => 1,
+            Role::Device(_) => return,
+        };
+        let mut kept = self.staging.lock().unwrap_or_else(|e| e.into_inner());
+        if kept[slot]
+            .as_ref()
+            .is_none_or(|k| k.vk_size < buffer.vk_size)
+        {
+            kept[slot] = Some(buffer);
+        }
     }
 
     /// Index of the first memory type allowed by `type_bits` that has all flags of the earliest

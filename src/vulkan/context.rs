@@ -346,6 +346,8 @@ pub struct Context {
     pub(crate) stage_words: bool,
     info: DeviceInfo,
     limits: DeviceLimits,
+    /// The staging buffers kept between transfers: upload, readback (`Context::staging`).
+    pub(crate) staging: Mutex<[Option<super::Buffer>; 2]>,
 }
 
 fn physical_is_cpu(info: &DeviceInfo) -> bool {
@@ -426,6 +428,7 @@ impl Context {
             stage_words: false,
             info: physical.info,
             limits: physical.limits,
+            staging: Mutex::new([None, None]),
             shared,
         };
         // Only on CPU devices (lavapipe), where a texel store costs several

@@ -345,6 +345,7 @@ impl Context {
                 &[to_shader],
             );
         })?;
+        self.keep_staging(staging);
         Ok(result)
     }
 
@@ -464,6 +465,7 @@ impl Context {
                 &[to_shader],
             );
         })?;
+        self.keep_staging(staging);
         Ok(())
     }
 

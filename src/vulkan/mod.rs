@@ -11,7 +11,7 @@ mod dispatch;
 mod image;
 mod pipeline;
 
-pub use buffer::{Buffer, BufferUsage};
+pub use buffer::{Buffer, BufferUsage, MAX_KEPT_STAGING};
 pub use context::{Context, ContextOptions, DeviceInfo, DeviceLimits, DeviceSelector};
 pub use dispatch::{Dispatch, Resource};
 pub use image::{TexelImage, TEXEL_BYTES, TEXEL_ROW};
