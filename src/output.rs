@@ -149,6 +149,16 @@ impl Srgb8Table {
 
 /// Encodes the image in memory.
 pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageError> {
+    encode_with(image, format, png::Compression::Balanced)
+}
+
+/// [`encode`] with a PNG compression level of the caller's: `watch` writes its previews with
+/// [`png::Compression::Fast`], which the next stage overwrites anyway.
+pub fn encode_with(
+    image: &Image,
+    format: Format,
+    compression: png::Compression,
+) -> Result<Vec<u8>, image::ImageError> {
     let mut bytes = Vec::new();
     let cursor = &mut std::io::Cursor::new(&mut bytes);
     match format {
@@ -157,7 +167,7 @@ pub fn encode(image: &Image, format: Format) -> Result<Vec<u8>, image::ImageErro
                 return Err(size_mismatch());
             }
             let w = image.width as usize;
-            encode_png_rows(cursor, image.width, image.height, |y, row| {
+            encode_png_rows_with(cursor, image.width, image.height, compression, |y, row| {
                 let src = &image.pixels[y as usize * w..(y as usize + 1) * w];
                 for (out, p) in row.chunks_exact_mut(3).zip(src) {
                     out.copy_from_slice(&[srgb8(p[0]), srgb8(p[1]), srgb8(p[2])]);
@@ -189,12 +199,23 @@ pub fn encode_png_rows<W: Write>(
     out: W,
     width: u32,
     height: u32,
+    row: impl FnMut(u32, &mut [u8]) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    encode_png_rows_with(out, width, height, png::Compression::Balanced, row)
+}
+
+/// [`encode_png_rows`] at another compression level.
+fn encode_png_rows_with<W: Write>(
+    out: W,
+    width: u32,
+    height: u32,
+    compression: png::Compression,
     mut row: impl FnMut(u32, &mut [u8]) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Balanced);
+    encoder.set_compression(compression);
     encoder.set_filter(png::Filter::Adaptive);
     let mut writer = encoder.write_header()?;
     let mut stream = writer.stream_writer()?;

@@ -572,7 +572,12 @@ impl Output {
     ) -> Result<(Duration, Duration), String> {
         let t0 = Instant::now();
         let image = stage::upscale(&frame.image, full.0, full.1);
-        let bytes = output::encode(&image, self.format)
+        // A preview is overwritten by the next stage: the faster encode.
+        let compression = match (frame.image.width, frame.image.height) == full {
+            true => png::Compression::Balanced,
+            false => png::Compression::Fast,
+        };
+        let bytes = output::encode_with(&image, self.format, compression)
             .map_err(|e| format!("{}: cannot encode: {e}", self.path.display()))?;
         let encode = t0.elapsed();
         let t1 = Instant::now();
