@@ -285,7 +285,10 @@ fn main() -> anyhow::Result<()> {
     // run (one of 400,000 values; after many runs a repeat hit the user's
     // cache and timed an edit at 16 ms), while an undo still finds the
     // pipelines this run compiled.
-    std::env::set_var("MESA_SHADER_CACHE_DIR", tmp.path().join("mesa_shader_cache"));
+    std::env::set_var(
+        "MESA_SHADER_CACHE_DIR",
+        tmp.path().join("mesa_shader_cache"),
+    );
     let shaders = tmp.path().join("shaders");
     copy_dir(&root.join("shaders"), &shaders)?;
     let scene = tmp.path().join("showcase.json");
