@@ -390,6 +390,45 @@ mod tests {
         }
     }
 
+    /// A scene without textures gets a Phong shade pipeline without the
+    /// texture sampler: `render::prune` drops the arms that
+    /// `penumbra_HAS_TEXTURES` switches off, which was most of the pipeline
+    /// creation of a Phong edit on lavapipe (docs/reload.md). The texture
+    /// sampler is the only code that loads from `penumbra_texture_texels`
+    /// (binding 20), so its absence shows as that binding's absence.
+    #[test]
+    fn without_textures_the_phong_pipeline_has_no_sampler() {
+        let file = ProgramFile::Builtin("shading/phong.wgsl");
+        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+        let s = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
+        let compile = |textures: bool| {
+            let key = super::super::StageKernel {
+                features: variant(&Features {
+                    textures,
+                    triangles: true,
+                    directional_lights: true,
+                    ..Features::default()
+                }),
+                ..Default::default()
+            };
+            s.assembled.compile_entry(&key, SHADE_ENTRY_POINT).unwrap()
+        };
+        // OpDecorate %var Binding 20: (4 << 16) | 71, the variable, 33, 20.
+        let binds_20 = |words: &[u32]| {
+            words
+                .windows(4)
+                .any(|w| w[0] == (4 << 16) | 71 && w[2] == 33 && w[3] == 20)
+        };
+        let with = compile(true);
+        let without = compile(false);
+        assert!(
+            binds_20(&with),
+            "the sampler's texels are bound with textures"
+        );
+        assert!(!binds_20(&without), "the sampler stayed without textures");
+        assert!(without.len() < with.len());
+    }
+
     #[test]
     fn a_file_without_params_gets_the_placeholder() {
         let file = ProgramFile::User("normals.wgsl".into());
