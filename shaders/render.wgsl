@@ -27,9 +27,6 @@ override HAS_TEXTURES: bool = true;
 override HAS_ATTRIBUTES: bool = true;
 override HAS_NORMAL_MAPS: bool = true;
 override HAS_ALPHA_TESTS: bool = true;
-// Some object emits (scene::Features::emission): only the hit records of
-// such scenes need the object for the shade stage (stages/records.wgsl).
-override HAS_EMISSION: bool = true;
 // Kernel variants chosen by the user (render::KernelOptions).
 override USE_BVH: bool = true;
 override TRIANGLE_TEST: u32 = 0u;

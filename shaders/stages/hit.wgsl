@@ -51,14 +51,9 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         let hit = closest_hit(ray);
         let slot = tile_slot(px);
         if hit.found {
-            let position = bitcast<vec3<u32>>(hit.position);
-            if record_shading() {
-                store_record(slot, 0u, vec4<u32>(position, record_kind_object(hit.kind, hit.object)));
-                store_record(slot, 2u, vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
-            } else {
-                store_record(slot, 0u, vec4<u32>(position, record_kind_object(hit.kind, hit.shader)));
-            }
+            store_record(slot, 0u, vec4<u32>(bitcast<vec3<u32>>(hit.position), record_kind_object(hit.kind, hit.object)));
             store_record(slot, 1u, vec4<u32>(bitcast<vec3<u32>>(hit.geometric_normal), hit.index));
+            store_record(slot, 2u, vec4<u32>(bitcast<vec3<u32>>(hit.shading_normal), hit.shader));
             if record_coords() {
                 store_record(slot, 3u, vec4<u32>(bitcast<vec2<u32>>(hit.coords), bitcast<vec2<u32>>(hit.lambda)));
             }

@@ -28,11 +28,9 @@ const KIND_NONE: u32 = 0xffffffffu;
 
 // A hit record (render::layout::RECORD_TEXELS texels at binding 14):
 //   0: position (camera-relative), then the kind and the scene object in
-//      one word, `record_kind_object` (KIND_NONE: the ray hit nothing);
-//      without texel 2, the kind and the scene's shader instead
+//      one word, `record_kind_object` (KIND_NONE: the ray hit nothing)
 //   1: unit geometric normal facing the viewer, primitive index
-//   2: unit shading normal facing the viewer, the scene's shader; written
-//      and read only where `record_shading()`
+//   2: unit shading normal facing the viewer, the scene's shader
 //   3: triangles: the barycentrics (u, v), which the shade stage
 //      interpolates vertex attributes with; planes and spheres: their
 //      texture coordinates (surface.wgsl); then the geometric level of
@@ -56,18 +54,6 @@ fn record_kind_object(kind: u32, object: u32) -> u32 {
 // (The shade stage decodes the word itself: stages/shade.wgsl.)
 fn record_kind(word: u32) -> u32 {
     return select(word & ((1u << KIND_BITS) - 1u), KIND_NONE, word == KIND_NONE);
-}
-
-// Whether the records' texel 2 is needed. Without vertex normals and normal
-// maps the shading normal is the geometric one, and without attributes and
-// emission the shade stage needs neither the primitive (texel 1) nor the
-// object, so word 0.w holds the kind and the shader and no texel 2 is
-// stored or loaded (the shade stage's penumbra_record_shading is the same
-// test of the same features). That saved about 3 % of the bunny frame
-// (docs/stages.md). The shader index shares the word as the object does
-// (render::MAX_OBJECTS bounds both).
-fn record_shading() -> bool {
-    return HAS_VERTEX_NORMALS || HAS_NORMAL_MAPS || HAS_ATTRIBUTES || HAS_EMISSION;
 }
 
 // Whether the records' texel 3 is needed: a scene of triangles without

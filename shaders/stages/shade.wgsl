@@ -94,18 +94,6 @@ override penumbra_HAS_CHECKER: bool = true;
 // with them, or with attributes or textures, the records have texel 3.
 override penumbra_HAS_PLANES: bool = true;
 override penumbra_HAS_SPHERES: bool = true;
-// The scene has vertex normals or normal maps (render.wgsl's
-// HAS_VERTEX_NORMALS, HAS_NORMAL_MAPS): with them, or with attributes or
-// emission, the records have texel 2.
-override penumbra_HAS_VERTEX_NORMALS: bool = true;
-override penumbra_HAS_NORMAL_MAPS: bool = true;
-
-// stages/records.wgsl's record_shading: whether the records have texel 2
-// (else the shading normal is the geometric one, and word 0.w holds the
-// kind and the shader).
-fn penumbra_record_shading() -> bool {
-    return penumbra_HAS_VERTEX_NORMALS || penumbra_HAS_NORMAL_MAPS || penumbra_HAS_ATTRIBUTES || penumbra_HAS_EMISSION;
-}
 
 // stages/records.wgsl's record_coords: whether the records have texel 3.
 fn penumbra_record_coords() -> bool {
@@ -151,12 +139,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if t0.w == penumbra_KIND_NONE {
         return;
     }
-    // Texel 2 (shading normal, shader), or without it the shader from word
-    // 0.w (the normal is texel 1's, loaded below).
-    var t2 = vec4<u32>(0u, 0u, 0u, t0.w >> penumbra_KIND_BITS);
-    if penumbra_record_shading() {
-        t2 = textureLoad(penumbra_hit_records, penumbra_texel(r + 2u));
-    }
+    let t2 = textureLoad(penumbra_hit_records, penumbra_texel(r + 2u));
     // The leaf shader's program and first parameter word: material
     // resolve's, or without checkers the hit's own shader's. (Reading the
     // table costs less than a resolved texel written by the hit stage and
@@ -171,10 +154,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let t1 = textureLoad(penumbra_hit_records, penumbra_texel(r + 1u));
-    var ns = penumbra_f3(t1);
-    if penumbra_record_shading() {
-        ns = penumbra_f3(t2);
-    }
+    let ns = penumbra_f3(t2);
     // stages/records.wgsl's kind-and-object word (not KIND_NONE here).
     let kind = t0.w & ((1u << penumbra_KIND_BITS) - 1u);
     let object = t0.w >> penumbra_KIND_BITS;

@@ -40,10 +40,7 @@ fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
             start.position = bitcast<vec3<f32>>(t0.xyz);
             start.geometric_normal = bitcast<vec3<f32>>(t1.xyz);
             start.index = t1.w;
-            shading_normal = start.geometric_normal;
-            if record_shading() {
-                shading_normal = bitcast<vec3<f32>>(textureLoad(hit_records, record_texel(slot, 2u)).xyz);
-            }
+            shading_normal = bitcast<vec3<f32>>(textureLoad(hit_records, record_texel(slot, 2u)).xyz);
         }
         let pixel = px.y * push.size.x + px.x;
         traced = queue_light_samples(pixel, slot, start, shading_normal);

@@ -602,10 +602,8 @@ pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPS
 /// away; without checkers the shade stage reads a hit's leaf shader from the
 /// shader table instead of a resolved texel; without planes, spheres,
 /// attributes and textures the hit records have no texel 4 to load
-/// (`record_coords` in `shaders/stages/records.wgsl`), and without vertex
-/// normals, normal maps, attributes and emission no shading-normal texel
-/// (`record_shading`).
-pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 9] {
+/// (`record_coords` in `shaders/stages/records.wgsl`).
+pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
     [
         ("penumbra_HAS_TEXTURES", f.textures),
         ("penumbra_HAS_ATTRIBUTES", f.attributes),
@@ -614,13 +612,11 @@ pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 9] {
         ("penumbra_HAS_CHECKER", f.checker),
         ("penumbra_HAS_PLANES", f.planes),
         ("penumbra_HAS_SPHERES", f.spheres),
-        ("penumbra_HAS_VERTEX_NORMALS", f.vertex_normals),
-        ("penumbra_HAS_NORMAL_MAPS", f.normal_maps),
     ]
 }
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 14] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -635,7 +631,6 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 14] {
         ("HAS_ATTRIBUTES", f.attributes),
         ("HAS_NORMAL_MAPS", f.normal_maps),
         ("HAS_ALPHA_TESTS", f.alpha_tests),
-        ("HAS_EMISSION", f.emission),
     ]
 }
 
@@ -750,9 +745,7 @@ mod tests {
                 3 => f.emission = true,
                 4 => f.checker = true,
                 5 => f.planes = true,
-                6 => f.spheres = true,
-                7 => f.vertex_normals = true,
-                _ => f.normal_maps = true,
+                _ => f.spheres = true,
             }
             let on: Vec<&str> = shade_override_values(&f)
                 .into_iter()
@@ -760,7 +753,7 @@ mod tests {
                 .map(|(n, _)| n)
                 .collect();
             assert_eq!(on, [*name]);
-            if *name != "penumbra_HAS_COLOURS" {
+            if !matches!(*name, "penumbra_HAS_COLOURS" | "penumbra_HAS_EMISSION") {
                 assert_eq!(engine(&f), [name.strip_prefix("penumbra_").unwrap()]);
             }
             // shade::variant keeps the feature, so pipelines of scenes that

@@ -46,19 +46,16 @@ const TILE: u32 = 8;
 /// Bits of a hit record's kind: the rest of its word holds the scene object
 /// (`KIND_BITS` in `shaders/stages/records.wgsl`).
 pub const KIND_BITS: u32 = 2;
-/// Most objects, and most shaders, a scene may have: the index of either
-/// shares a word of the hit record with the kind (the shader's where the
-/// records have no shading-normal texel: `record_shading` in
-/// `shaders/stages/records.wgsl`).
+/// Most objects a scene may have: their index shares a word of the hit
+/// record with the kind.
 pub const MAX_OBJECTS: usize = 1 << (32 - KIND_BITS);
 
-/// Refuses a scene of more than [`MAX_OBJECTS`] entries of `field`
-/// (`objects` or `shaders`), naming the field.
-fn check_objects(field: &str, n: usize) -> Result<(), RenderError> {
+/// Refuses a scene of more than [`MAX_OBJECTS`] objects, naming the field.
+fn check_objects(n: usize) -> Result<(), RenderError> {
     if n > MAX_OBJECTS {
         return Err(RenderError::Scene {
-            field: field.into(),
-            message: format!("{n} {field}, more than the {MAX_OBJECTS} a scene may have"),
+            field: "objects".into(),
+            message: format!("{n} objects, more than the {MAX_OBJECTS} a scene may have"),
         });
     }
     Ok(())
@@ -828,8 +825,7 @@ impl Renderer {
         let (width, height) = (scene.camera.width, scene.camera.height);
         self.check_size(width, height, whole)?;
         self.check_textures(scene)?;
-        check_objects("objects", scene.objects.len())?;
-        check_objects("shaders", scene.shaders.len())?;
+        check_objects(scene.objects.len())?;
         let t0 = Instant::now();
         let mut gpu = GpuScene::new(scene);
         let materials =
@@ -1514,14 +1510,8 @@ mod tests {
             assert_eq!(word >> KIND_BITS, last);
             assert_eq!(word & ((1 << KIND_BITS) - 1), kind);
         }
-        assert!(check_objects("objects", MAX_OBJECTS).is_ok());
-        let e = check_objects("objects", MAX_OBJECTS + 1)
-            .unwrap_err()
-            .to_string();
+        assert!(check_objects(MAX_OBJECTS).is_ok());
+        let e = check_objects(MAX_OBJECTS + 1).unwrap_err().to_string();
         assert!(e.starts_with("objects: "), "{e}");
-        let e = check_objects("shaders", MAX_OBJECTS + 1)
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("shaders: "), "{e}");
     }
 }

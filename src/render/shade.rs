@@ -38,8 +38,6 @@ pub fn variant(f: &Features) -> Features {
         checker: f.checker,
         planes: f.planes,
         spheres: f.spheres,
-        vertex_normals: f.vertex_normals,
-        normal_maps: f.normal_maps,
         ..Features::default()
     }
 }
