@@ -669,6 +669,20 @@ fn spirv_options() -> naga::back::spv::Options<'static> {
     }
 }
 
+/// A WGSL module and its info, parsed and validated with every flag and
+/// capability (the tests of `prune` and `spirv` start from one).
+#[cfg(test)]
+pub(crate) fn valid_module(src: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    let module = naga::front::wgsl::parse_str(src).expect("WGSL");
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .expect("valid");
+    (module, info)
+}
+
 /// The default shader directory of a source checkout, if it exists.
 pub fn checkout_shader_dir() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");

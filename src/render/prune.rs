@@ -157,13 +157,7 @@ mod tests {
     /// `src` with its overrides set to `values`, as the renderer resolves
     /// them, then pruned.
     fn pruned(src: &str, values: &[(&str, f64)]) -> (Module, usize) {
-        let module = naga::front::wgsl::parse_str(src).expect("WGSL");
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::all(),
-        )
-        .validate(&module)
-        .expect("valid");
+        let (module, info) = crate::render::compile::valid_module(src);
         let constants = values.iter().map(|(k, v)| (k.to_string(), *v)).collect();
         let (module, _) = naga::back::pipeline_constants::process_overrides(
             &module,

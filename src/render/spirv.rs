@@ -33,9 +33,29 @@ const HEADER_WORDS: usize = 5;
 /// `OpDot`.
 const CONTRACTIBLE: [u32; 10] = [127, 129, 131, 133, 142, 143, 144, 145, 146, 148];
 
-/// An instruction's opcode and word count.
-fn split(word: u32) -> (u32, usize) {
-    (word & 0xffff, (word >> 16) as usize)
+/// The module's instructions after the header, each as its word offset,
+/// opcode and operands (the words after the first); `None` if the words do
+/// not parse as instructions (a word count of zero or past the end).
+fn instructions(words: &[u32]) -> Option<Vec<(usize, u32, &[u32])>> {
+    let mut out = Vec::new();
+    let mut at = HEADER_WORDS;
+    while at < words.len() {
+        let (op, count) = (words[at] & 0xffff, (words[at] >> 16) as usize);
+        if count == 0 || at + count > words.len() {
+            return None;
+        }
+        out.push((at, op, &words[at + 1..at + count]));
+        at += count;
+    }
+    Some(out)
+}
+
+/// The result id of a [`CONTRACTIBLE`] instruction (its second operand).
+fn contractible_result(op: u32, operands: &[u32]) -> Option<u32> {
+    CONTRACTIBLE
+        .contains(&op)
+        .then(|| operands.get(1).copied())
+        .flatten()
 }
 
 /// `words` with a `NoContraction` decoration for the result of every
@@ -46,30 +66,25 @@ fn split(word: u32) -> (u32, usize) {
 /// of zero or past the end) is returned unchanged: naga wrote it, so that
 /// would be a bug of ours, and the driver's own validation then reports it.
 pub fn forbid_contraction(words: Vec<u32>) -> Vec<u32> {
-    let mut results = Vec::new();
+    let Some(ins) = instructions(&words) else {
+        return words;
+    };
+    let results: Vec<u32> = ins
+        .iter()
+        .filter_map(|&(_, op, operands)| contractible_result(op, operands))
+        .collect();
     // Where the new decorations go: after the last decoration before the
     // first function, or, with none, before the first function.
-    let mut insert_at = None;
-    let mut first_function = None;
-    let mut at = HEADER_WORDS;
-    while at < words.len() {
-        let (op, count) = split(words[at]);
-        if count == 0 || at + count > words.len() {
-            return words;
-        }
-        if first_function.is_none() {
-            if op == OP_FUNCTION {
-                first_function = Some(at);
-            } else if op == OP_DECORATE || op == OP_MEMBER_DECORATE {
-                insert_at = Some(at + count);
-            }
-        }
-        if CONTRACTIBLE.contains(&op) && count >= 3 {
-            results.push(words[at + 2]);
-        }
-        at += count;
-    }
-    let Some(insert_at) = insert_at.or(first_function) else {
+    let first_function = ins
+        .iter()
+        .position(|&(_, op, _)| op == OP_FUNCTION)
+        .unwrap_or(ins.len());
+    let insert_at = ins[..first_function]
+        .iter()
+        .rfind(|&&(_, op, _)| op == OP_DECORATE || op == OP_MEMBER_DECORATE)
+        .map(|&(at, _, operands)| at + 1 + operands.len())
+        .or(ins.get(first_function).map(|&(at, _, _)| at));
+    let Some(insert_at) = insert_at else {
         return words;
     };
     let mut out = Vec::with_capacity(words.len() + 3 * results.len());
@@ -85,39 +100,25 @@ pub fn forbid_contraction(words: Vec<u32>) -> Vec<u32> {
 /// (tests check that every module the renderer compiles has none).
 #[cfg(test)]
 pub(crate) fn contractible_results(words: &[u32]) -> usize {
-    let mut decorated = std::collections::HashSet::new();
-    let mut results = Vec::new();
-    let mut at = HEADER_WORDS;
-    while at < words.len() {
-        let (op, count) = split(words[at]);
-        assert!(
-            count > 0 && at + count <= words.len(),
-            "malformed at word {at}"
-        );
-        if op == OP_DECORATE && count == 3 && words[at + 2] == NO_CONTRACTION {
-            decorated.insert(words[at + 1]);
-        }
-        if CONTRACTIBLE.contains(&op) {
-            results.push(words[at + 2]);
-        }
-        at += count;
-    }
-    results.iter().filter(|id| !decorated.contains(id)).count()
+    let ins = instructions(words).expect("SPIR-V that parses");
+    let decorated: std::collections::HashSet<u32> = ins
+        .iter()
+        .filter(|&&(_, op, w)| op == OP_DECORATE && w.len() == 2 && w[1] == NO_CONTRACTION)
+        .map(|&(_, _, w)| w[0])
+        .collect();
+    ins.iter()
+        .filter_map(|&(_, op, w)| contractible_result(op, w))
+        .filter(|id| !decorated.contains(id))
+        .count()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// SPIR-V of a small WGSL module, as the renderer writes it.
+    /// SPIR-V of a small WGSL module.
     fn spirv(src: &str) -> Vec<u32> {
-        let module = naga::front::wgsl::parse_str(src).expect("WGSL");
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::all(),
-        )
-        .validate(&module)
-        .expect("valid");
+        let (module, info) = crate::render::compile::valid_module(src);
         let options = naga::back::spv::Options {
             lang_version: (1, 3),
             flags: naga::back::spv::WriterFlags::empty(),
@@ -126,20 +127,13 @@ mod tests {
         naga::back::spv::write_vec(&module, &info, &options, None).expect("SPIR-V")
     }
 
-    /// The instructions of a module: (opcode, operands).
-    fn instructions(words: &[u32]) -> Vec<(u32, Vec<u32>)> {
-        let mut out = Vec::new();
-        let mut at = HEADER_WORDS;
-        while at < words.len() {
-            let (op, count) = split(words[at]);
-            assert!(
-                count > 0 && at + count <= words.len(),
-                "malformed at word {at}"
-            );
-            out.push((op, words[at + 1..at + count].to_vec()));
-            at += count;
-        }
-        out
+    /// The instructions of a module as (opcode, operands).
+    fn ops(words: &[u32]) -> Vec<(u32, Vec<u32>)> {
+        instructions(words)
+            .expect("SPIR-V that parses")
+            .into_iter()
+            .map(|(_, op, w)| (op, w.to_vec()))
+            .collect()
     }
 
     const SRC: &str = "
@@ -158,7 +152,7 @@ mod tests {
     fn every_float_operation_is_decorated_once_in_the_annotations() {
         let before = spirv(SRC);
         let after = forbid_contraction(before.clone());
-        let ins = instructions(&after);
+        let ins = ops(&after);
         let arithmetic: Vec<u32> = ins
             .iter()
             .filter(|(op, _)| CONTRACTIBLE.contains(op))
@@ -186,7 +180,7 @@ mod tests {
             .into_iter()
             .filter(|(op, w)| !(*op == OP_DECORATE && w.get(1) == Some(&NO_CONTRACTION)))
             .collect();
-        assert_eq!(without, instructions(&before));
+        assert_eq!(without, ops(&before));
         assert!(contractible_results(&before) >= 6);
         assert_eq!(contractible_results(&after), 0);
     }
