@@ -48,6 +48,15 @@ override FUSED_SHADOWS: bool = true;
 // stores), rather than with textureStore.
 override STAGE_WORDS: bool = false;
 
+// A texel's four words as the two 64-bit words (low word first: the same
+// bytes) that the stages store with STAGE_WORDS. lavapipe stores a vector
+// at a per-lane address one component at a time, each with a bounds check
+// and a branch, so two 64-bit components cost less than four 32-bit ones
+// (docs/stages.md).
+fn stage_words(v: vec4<u32>) -> vec2<u64> {
+    return vec2<u64>(u64(v.x) | (u64(v.y) << 32u), u64(v.z) | (u64(v.w) << 32u));
+}
+
 // Mirrored by render::layout::Globals.
 struct Globals {
     camera: Camera,

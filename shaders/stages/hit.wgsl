@@ -9,12 +9,12 @@
 
 @group(0) @binding(14) var hit_records_out: texture_storage_2d<rgba32uint, write>;
 // The records' memory as words (STAGE_WORDS: render.wgsl).
-@group(0) @binding(24) var<storage, read_write> hit_record_words: array<vec4<u32>>;
+@group(0) @binding(24) var<storage, read_write> hit_record_words: array<vec2<u64>>;
 
 // Writes texel `i` of record `slot`.
 fn store_record(slot: u32, i: u32, value: vec4<u32>) {
     if STAGE_WORDS {
-        hit_record_words[slot * RECORD_TEXELS + i] = value;
+        hit_record_words[slot * RECORD_TEXELS + i] = stage_words(value);
     } else {
         textureStore(hit_records_out, record_texel(slot, i), value);
     }

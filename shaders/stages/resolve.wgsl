@@ -9,14 +9,14 @@
 // Material resolve's result per record (stages/records.wgsl), and the same
 // memory as words (STAGE_WORDS).
 @group(0) @binding(16) var resolved: texture_storage_2d<rgba32uint, write>;
-@group(0) @binding(26) var<storage, read_write> resolved_words: array<vec4<u32>>;
+@group(0) @binding(26) var<storage, read_write> resolved_words: array<vec2<u64>>;
 
 fn resolve_material(slot: u32, hit: Hit) {
     let leaf = resolve_shader(hit.shader, hit.position, hit.geometric_normal);
     let node = shader_node(leaf);
     let value = vec4<u32>(leaf, node.program, node.params, 0u);
     if STAGE_WORDS {
-        resolved_words[slot] = value;
+        resolved_words[slot] = stage_words(value);
     } else {
         textureStore(resolved, texel(slot), value);
     }

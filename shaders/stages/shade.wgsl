@@ -45,6 +45,10 @@ struct penumbra_PushConstants {
 // writes no resolved material.
 @group(0) @binding(6) var penumbra_shader_nodes: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(7) var<storage, read_write> penumbra_image: array<vec4<f32>>;
+// The same buffer as 64-bit words, which the stage stores its colours as
+// with penumbra_STAGE_WORDS (render.wgsl's STAGE_WORDS and stage_words say
+// why); pruning keeps one of the two.
+@group(0) @binding(27) var<storage, read_write> penumbra_image_words: array<vec2<u64>>;
 @group(0) @binding(17) var<storage, read_write> penumbra_radiance: array<vec4<f32>>;
 @group(0) @binding(18) var penumbra_params: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(19) var penumbra_light_colours: texture_storage_2d<rgba32uint, read>;
@@ -94,6 +98,8 @@ override penumbra_HAS_CHECKER: bool = true;
 // with them, or with attributes or textures, the records have texel 3.
 override penumbra_HAS_PLANES: bool = true;
 override penumbra_HAS_SPHERES: bool = true;
+// render.wgsl's STAGE_WORDS (compile.rs: SHADE_STAGE_WORDS).
+override penumbra_STAGE_WORDS: bool = false;
 
 // stages/records.wgsl's record_coords: whether the records have texel 3.
 fn penumbra_record_coords() -> bool {
@@ -240,5 +246,10 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if push.pass_index > 0u && (push.flags & penumbra_FLAG_FRESH) == 0u {
         value += penumbra_image[at];
     }
-    penumbra_image[at] = value;
+    if penumbra_STAGE_WORDS {
+        let w = bitcast<vec4<u32>>(value);
+        penumbra_image_words[at] = vec2<u64>(u64(w.x) | (u64(w.y) << 32u), u64(w.z) | (u64(w.w) << 32u));
+    } else {
+        penumbra_image[at] = value;
+    }
 }

@@ -17,7 +17,7 @@
 
 @group(0) @binding(15) var queue: texture_storage_2d<rgba32uint, write>;
 // The queue's memory as words (STAGE_WORDS: render.wgsl).
-@group(0) @binding(25) var<storage, read_write> queue_words: array<vec4<u32>>;
+@group(0) @binding(25) var<storage, read_write> queue_words: array<vec2<u64>>;
 
 @compute @workgroup_size(8, 8, 1)
 fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -92,7 +92,7 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
                 let entry = base + k - first;
                 let value = vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff));
                 if STAGE_WORDS {
-                    queue_words[entry * QUEUE_TEXELS] = value;
+                    queue_words[entry * QUEUE_TEXELS] = stage_words(value);
                 } else {
                     textureStore(queue, queue_texel(entry, 0u), value);
                 }

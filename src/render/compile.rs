@@ -339,7 +339,10 @@ impl Assembled {
         };
         let mut validator = Validator::new(
             ValidationFlags::all(),
-            Capabilities::IMMEDIATES | Capabilities::SUBGROUP,
+            // 64-bit integers for the stage words (render.wgsl's
+            // `stage_words`); a module without them declares no Int64
+            // capability (pruning drops them with STAGE_WORDS off).
+            Capabilities::IMMEDIATES | Capabilities::SUBGROUP | Capabilities::SHADER_INT64,
         );
         // Subgroup sums for the ray counters; the Vulkan context only offers
         // devices that support them in compute shaders.
@@ -368,11 +371,14 @@ impl Assembled {
         };
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
-        // The shade stage's overrides ([`shade_override_values`]).
+        // The shade stage's overrides ([`shade_override_values`]), and its
+        // name for STAGE_WORDS.
         for (name, on) in shade_override_values(&key.features) {
             let on = on || !kernel.specialise;
             constants.insert(name.into(), if on { 1.0 } else { 0.0 });
         }
+        let words = key.settings.stage_words;
+        constants.insert(SHADE_STAGE_WORDS.into(), if words { 1.0 } else { 0.0 });
         // Each stage declares only the overrides its files use; naga refuses
         // values for any other.
         constants.retain(|name, _| {
@@ -615,6 +621,11 @@ pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
     ]
 }
 
+/// The shade stage's name (`shaders/stages/shade.wgsl`) for the setting
+/// `STAGE_WORDS` of [`setting_values`]: it stores its colours as 64-bit
+/// words.
+pub const SHADE_STAGE_WORDS: &str = "penumbra_STAGE_WORDS";
+
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
 pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
     [
@@ -735,9 +746,15 @@ mod tests {
         let mut table: Vec<String> = shade_override_values(&Features::default())
             .iter()
             .map(|(n, _)| n.to_string())
+            .chain([SHADE_STAGE_WORDS.to_string()])
             .collect();
         table.sort();
         assert_eq!(wgsl, table);
+        // Its stage-words override is the engine's setting of that name.
+        let setting = SHADE_STAGE_WORDS.strip_prefix("penumbra_").unwrap();
+        assert!(setting_values(&Settings::default())
+            .iter()
+            .any(|(n, _)| *n == setting));
         // Every feature flag of the table maps to the engine's override of
         // the same feature: set one feature at a time and compare.
         let engine = |f: &Features| -> Vec<&str> {
@@ -782,6 +799,8 @@ mod tests {
 
     #[test]
     fn every_feature_set_compiles() {
+        /// SPIR-V's `Int64` capability.
+        const INT64: u32 = 11;
         let src = ShaderSource::Embedded.assemble().unwrap();
         let all = Features {
             planes: true,
@@ -828,7 +847,25 @@ mod tests {
                         0,
                         "{stage:?}"
                     );
+                    // Without stage words no stage uses 64-bit integers,
+                    // so a device without shaderInt64 runs them all.
+                    assert!(
+                        !super::super::spirv::capabilities(&words).contains(&INT64),
+                        "{stage:?}"
+                    );
                 }
+                // With them the hit stage stores its records as 64-bit words.
+                let words_key = StageKernel {
+                    settings: Settings {
+                        stage_words: true,
+                        ..Settings::default()
+                    },
+                    ..key
+                };
+                let hit = src
+                    .compile_entry(&words_key, super::super::stages::Stage::Hit.entry_point())
+                    .unwrap();
+                assert!(super::super::spirv::capabilities(&hit).contains(&INT64));
                 assert_eq!(words[1], 0x0001_0300, "SPIR-V 1.3");
                 compile(&src, &Features::default(), &kernel).unwrap();
             }

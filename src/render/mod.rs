@@ -459,6 +459,8 @@ impl Renderer {
         if on != self.allow_stage_words {
             self.allow_stage_words = on;
             self.stage_buffers.clear();
+            // The shade pipelines store their colours as words or not.
+            self.shade_pipelines.clear();
         }
     }
 
@@ -640,6 +642,10 @@ impl Renderer {
         }
         let key = StageKernel {
             features: variant,
+            settings: Settings {
+                stage_words: self.stage_words(),
+                ..Settings::default()
+            },
             ..StageKernel::default()
         };
         let spirv = source
@@ -906,6 +912,8 @@ impl Renderer {
             b(ctx.create_buffer("hit record words", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("queue words", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("resolved words", BufferUsage::Storage, 16)?),
+            // The image as words: a placeholder, replaced with the image.
+            b(ctx.create_buffer("image words", BufferUsage::Storage, 16)?),
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds
@@ -1216,6 +1224,7 @@ impl Renderer {
             .map(|(image, aovs)| {
                 let mut r = refs.clone();
                 r[Binding::Image as usize] = image.into();
+                r[Binding::ImageWords as usize] = image.into();
                 if let Some(b) = aovs {
                     r[Binding::Aovs as usize] = b.into();
                 }

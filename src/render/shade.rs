@@ -429,6 +429,31 @@ mod tests {
         assert!(without.len() < with.len());
     }
 
+    /// The shade stage stores its colours as 64-bit words only where the
+    /// stages write words (lavapipe): otherwise its module declares no
+    /// 64-bit integers, which a GPU without `shaderInt64` could not run.
+    #[test]
+    fn only_stage_words_give_the_shade_stage_64_bit_integers() {
+        /// SPIR-V's `Int64` capability.
+        const INT64: u32 = 11;
+        let file = ProgramFile::Builtin("shading/phong.wgsl");
+        let text = read_program(&ShaderSource::Embedded, &file).unwrap();
+        let s = assemble(&ShaderSource::Embedded, &file, &text).unwrap();
+        let int64 = |stage_words: bool| {
+            let key = super::super::StageKernel {
+                settings: super::super::Settings {
+                    stage_words,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let words = s.assembled.compile_entry(&key, SHADE_ENTRY_POINT).unwrap();
+            crate::render::spirv::capabilities(&words).contains(&INT64)
+        };
+        assert!(int64(true));
+        assert!(!int64(false));
+    }
+
     #[test]
     fn a_file_without_params_gets_the_placeholder() {
         let file = ProgramFile::User("normals.wgsl".into());

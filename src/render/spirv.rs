@@ -112,6 +112,19 @@ pub(crate) fn contractible_results(words: &[u32]) -> usize {
         .count()
 }
 
+/// The capabilities `words` declares (`OpCapability` operands).
+#[cfg(test)]
+pub(crate) fn capabilities(words: &[u32]) -> Vec<u32> {
+    /// `OpCapability`.
+    const OP_CAPABILITY: u32 = 17;
+    instructions(words)
+        .expect("SPIR-V that parses")
+        .into_iter()
+        .filter(|&(_, op, _)| op == OP_CAPABILITY)
+        .filter_map(|(_, _, w)| w.first().copied())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

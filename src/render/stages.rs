@@ -251,6 +251,10 @@ pub enum Binding {
     QueueWords,
     /// The resolved materials' memory as a storage buffer.
     ResolvedWords,
+    /// The image again (the same buffer as [`Binding::Image`]), which the
+    /// shade stage stores its colours into as 64-bit words where the stages
+    /// write words ([`super::Settings::stage_words`]).
+    ImageWords,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -269,7 +273,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 27] = {
+pub const BINDINGS: [BindingInfo; 28] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -307,6 +311,7 @@ pub const BINDINGS: [BindingInfo; 27] = {
         ),
         b(Binding::QueueWords, "queue_words", StorageReadWrite),
         b(Binding::ResolvedWords, "resolved_words", StorageReadWrite),
+        b(Binding::ImageWords, "image_words", StorageReadWrite),
     ]
 };
 

@@ -373,8 +373,19 @@ impl Context {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(physical.queue_family)
             .queue_priorities(&priorities)];
-        // No extensions and no optional features: keeps lavapipe and every GPU on one path.
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        // No extensions, and one optional feature: 64-bit integers, with which
+        // the stages store their records on a CPU device (`stage_words`).
+        // SAFETY: physical device from this instance.
+        let supported = unsafe {
+            instance
+                .instance
+                .get_physical_device_features(physical.handle)
+        };
+        let shader_int64 = supported.shader_int64 == vk::TRUE;
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(shader_int64);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features);
         // SAFETY: physical device from this instance; create info outlives the call.
         let device = unsafe {
             instance
@@ -433,9 +444,13 @@ impl Context {
         };
         // Only on CPU devices (lavapipe), where a texel store costs several
         // buffer stores; a GPU reads linear images more slowly than optimal
-        // ones and writes either fast.
-        context.stage_words =
-            linear_storage && physical_is_cpu(&context.info) && context.probe_stage_words()?;
+        // ones and writes either fast. The words are stored as 64-bit
+        // integers (shaders/render.wgsl's `stage_words`), which every CPU
+        // device we know of supports.
+        context.stage_words = linear_storage
+            && shader_int64
+            && physical_is_cpu(&context.info)
+            && context.probe_stage_words()?;
         Ok(context)
     }
 
