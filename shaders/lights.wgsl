@@ -40,6 +40,23 @@ struct Light {
 }
 
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
+// The first UNIFORM_LIGHTS lights again, as a uniform buffer
+// (render::layout::light_block): lavapipe loads a uniform buffer at an
+// address that is the same for every lane with one scalar load, also in
+// loops and branches, where its storage-buffer load is a loop over the
+// lanes (docs/stages.md measures the difference). Each component of such a
+// load is still a bounds check and a branch, so the first light, which the
+// stages read before any branch, comes from `lights` (first_light).
+const UNIFORM_LIGHTS: u32 = 128u;
+@group(0) @binding(28) var<uniform> light_block: array<Light, UNIFORM_LIGHTS>;
+
+// Light `i`, for the light loops (after first_light).
+fn light_at(i: u32) -> Light {
+    if i < UNIFORM_LIGHTS {
+        return light_block[i];
+    }
+    return lights[i];
+}
 
 // lights[0], read by the shadow stage's first statement. lavapipe loads data at a
 // uniform address once per SIMD group only outside all branches and loops;

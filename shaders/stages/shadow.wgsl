@@ -64,7 +64,7 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
     for (var i = 0u; i < globals.num_lights && k < end; i++) {
         var light = first_light;
         if i > 0u {
-            light = lights[i];
+            light = light_at(i);
         }
         let count = light_sample_count(light);
         if k + count <= first {

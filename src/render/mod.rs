@@ -914,6 +914,11 @@ impl Renderer {
             b(ctx.create_buffer("resolved words", BufferUsage::Storage, 16)?),
             // The image as words: a placeholder, replaced with the image.
             b(ctx.create_buffer("image words", BufferUsage::Storage, 16)?),
+            b(ctx.create_buffer_with_data(
+                "light block",
+                BufferUsage::Uniform,
+                bytemuck::cast_slice(&layout::light_block(lights)),
+            )?),
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
         // The records' image holds whole rows of texels (brute force binds

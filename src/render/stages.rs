@@ -255,6 +255,9 @@ pub enum Binding {
     /// shade stage stores its colours into as 64-bit words where the stages
     /// write words ([`super::Settings::stage_words`]).
     ImageWords,
+    /// The first lights again, as a uniform buffer (`shaders/lights.wgsl`:
+    /// `light_at`).
+    LightBlock,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -273,7 +276,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 28] = {
+pub const BINDINGS: [BindingInfo; 29] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -312,6 +315,7 @@ pub const BINDINGS: [BindingInfo; 28] = {
         b(Binding::QueueWords, "queue_words", StorageReadWrite),
         b(Binding::ResolvedWords, "resolved_words", StorageReadWrite),
         b(Binding::ImageWords, "image_words", StorageReadWrite),
+        b(Binding::LightBlock, "light_block", Uniform),
     ]
 };
 

@@ -258,3 +258,70 @@ fn spot_light_cone() {
         "coverage: {full} full, {dark} dark, {between} between"
     );
 }
+
+/// More lights than the uniform light block holds (`UNIFORM_LIGHTS`: the
+/// hit stage reads the first ones from it and the rest from the storage
+/// buffer): every light still counts, against the diffuse sum in f64. The
+/// two lights past the block are the brightest, so reading them wrong
+/// changes every pixel by far more than the tolerance.
+#[test]
+fn lights_past_the_uniform_block_count() {
+    let n = penumbra::render::layout::UNIFORM_LIGHTS + 2;
+    let cam = Ortho {
+        centre: DVec3::ZERO,
+        half_height: 3.0,
+        w: 33,
+        h: 25,
+    };
+    let lights: Vec<(DVec3, f64)> = (0..n)
+        .map(|k| {
+            let a = k as f64 * 2.399963;
+            let pos = DVec3::new(2.0 * a.cos(), 1.5 + 0.01 * k as f64, 2.0 * a.sin());
+            let intensity = if k + 2 >= n { 2.0 } else { 0.02 };
+            (pos, intensity)
+        })
+        .collect();
+    let json: Vec<String> = lights
+        .iter()
+        .map(|(pos, i)| {
+            format!(
+                r#"{{ "type": "point", "position": {}, "intensity": {i}, "ambient": [0, 0, 0], "diffuse": {:?}, "specular": [0, 0, 0] }}"#,
+                v3(*pos),
+                I_D
+            )
+        })
+        .collect();
+    let scene = support::load_json(&format!(
+        r#"{{
+  "camera": {},
+  "shaders": {{ "m": {{ "type": "phong", "ambient": [0, 0, 0], "diffuse": {:?}, "specular": [0, 0, 0], "shininess": 1 }} }},
+  "objects": [ {{ "type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "m" }} ],
+  "lights": [ {} ]
+}}"#,
+        cam.json(),
+        KD,
+        json.join(", ")
+    ));
+    let img = support::render(&scene).image;
+    let diffuse = |p: DVec3, lights: &[(DVec3, f64)]| -> DVec3 {
+        lights.iter().fold(DVec3::ZERO, |sum, (pos, i)| {
+            let l = (*pos - p).normalize();
+            sum + d(KD) * d(I_D) * l.y.max(0.0) * *i / (*pos - p).length_squared()
+        })
+    };
+    let mut differs = 0;
+    for y in 0..cam.h {
+        for x in 0..cam.w {
+            let p = cam.world(x, y);
+            let want = diffuse(p, &lights);
+            support::assert_rgb(img.at(x, y), want.to_array(), TOL);
+            let without = diffuse(p, &lights[..n - 2]);
+            differs += usize::from((want - without).x > 10.0 * TOL);
+        }
+    }
+    assert_eq!(
+        differs as u32,
+        cam.w * cam.h,
+        "test setup: the last lights must show"
+    );
+}

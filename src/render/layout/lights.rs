@@ -31,6 +31,21 @@ pub struct Light {
     pub _pad1: u32,
 }
 
+/// The lights that the uniform buffer `light_block` holds (the first ones
+/// of the scene; `shaders/lights.wgsl` reads any others from the storage
+/// buffer): 128 records of 112 bytes stay within the 16 KiB that Vulkan
+/// guarantees a uniform buffer binding.
+pub const UNIFORM_LIGHTS: usize = 128;
+
+/// The uniform light block: the first [`UNIFORM_LIGHTS`] of `lights`,
+/// zeros after them.
+pub fn light_block(lights: &[Light]) -> Vec<Light> {
+    let mut block = vec![Light::default(); UNIFORM_LIGHTS];
+    let n = lights.len().min(UNIFORM_LIGHTS);
+    block[..n].copy_from_slice(&lights[..n]);
+    block
+}
+
 /// Light kinds, as in `shaders/lights.wgsl`.
 pub const LIGHT_DIRECTIONAL: u32 = 0;
 /// Point light kind.

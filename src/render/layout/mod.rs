@@ -31,7 +31,10 @@ use glam::{DVec3, Vec3};
 pub use aov::Aov;
 pub use bvh::{node_bounds, node_bounds_f32, BvhNode, PRIM_SPHERE};
 pub use camera::Camera;
-pub use lights::{Light, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_RECT, LIGHT_SPHERE, LIGHT_SPOT};
+pub use lights::{
+    light_block, Light, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_RECT, LIGHT_SPHERE, LIGHT_SPOT,
+    UNIFORM_LIGHTS,
+};
 pub use primitives::{plane_axes, Plane, Sphere, Triangle, VertexNormals, NO_NORMALS};
 pub use queries::{QueryHit, QueryRay};
 pub use shading::{ShaderNode, SHADER_CHECKER, SHADER_LEAF};
@@ -444,6 +447,7 @@ mod tests {
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
+            ("UNIFORM_LIGHTS", lights::UNIFORM_LIGHTS as u32),
             ("TEXEL_ROW", crate::vulkan::TEXEL_ROW),
             ("RECORD_TEXELS", super::super::tiles::RECORD_TEXELS as u32),
             ("KIND_BITS", super::super::KIND_BITS),
