@@ -35,12 +35,23 @@ fn unit_float(x: u32) -> f32 {
 
 // Sample `n` of stream `stream` for pixel `pixel`, in [0, 1)².
 fn sample_2d(pixel: u32, stream: u32, n: u32) -> vec2<f32> {
-    let seed = push.seed;
+    return sample_2d_shifted(sample_shift(pixel, stream), pixel, stream, n);
+}
+
+// The stratified sampler's shift of the sequence for pixel `pixel` and
+// stream `stream` (unused by the random sampler): the same for every `n`,
+// so a loop over the samples of one stream computes it once, outside the
+// loop (the shadow stage's light loop does).
+fn sample_shift(pixel: u32, stream: u32) -> vec2<u32> {
+    let h = hash3(pixel, stream, push.seed);
+    return vec2<u32>(h, pcg(h));
+}
+
+// sample_2d, given `shift = sample_shift(pixel, stream)`.
+fn sample_2d_shifted(shift: vec2<u32>, pixel: u32, stream: u32, n: u32) -> vec2<f32> {
     if SAMPLER == SAMPLER_RANDOM {
-        let h = hash3(pixel, stream ^ (seed * 0x9e3779b9u), n);
+        let h = hash3(pixel, stream ^ (push.seed * 0x9e3779b9u), n);
         return vec2<f32>(unit_float(h), unit_float(pcg(h)));
     }
-    let h = hash3(pixel, stream, seed);
-    let shift = vec2<u32>(h, pcg(h));
     return vec2<f32>(unit_float(n * R2_A1 + shift.x), unit_float(n * R2_A2 + shift.y));
 }

@@ -71,6 +71,14 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
             k += count;
             continue;
         }
+        // The light's samples share their sequence's shift. (Nested ifs:
+        // pruning removes a constant `if`, not a lowered `&&`.)
+        var shift = vec2<u32>();
+        if HAS_AREA_LIGHTS {
+            if SAMPLER != SAMPLER_RANDOM {
+                shift = sample_shift(pixel, 1u + i);
+            }
+        }
         for (var j = 0u; j < count; j++) {
             if k >= first && k < end {
                 var to_light = vec3<f32>(0.0);
@@ -78,7 +86,7 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
                 if start.found {
                     var uv = vec2<f32>(0.5);
                     if HAS_AREA_LIGHTS {
-                        uv = sample_2d(pixel, 1u + i, push.pass_index * count + j);
+                        uv = sample_2d_shifted(shift, pixel, 1u + i, push.pass_index * count + j);
                     }
                     let ls = sample_light(light, start.position, uv);
                     if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
