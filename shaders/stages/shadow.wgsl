@@ -60,17 +60,22 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
     let base = slot * push.sample_count;
     let first = push.sample_first;
     let end = first + push.sample_count;
+    // Sample k of the pixel (lights in scene order, each light's samples in
+    // turn) is light i's sample j = k - (the samples of the lights before
+    // it); the loops visit only the chunk's, first <= k < end.
     var k = 0u;
-    for (var i = 0u; i < globals.num_lights && k < end; i++) {
+    for (var i = 0u; i < globals.num_lights; i++) {
+        if k >= end {
+            break;
+        }
         var light = first_light;
         if i > 0u {
             light = light_at(i);
         }
         let count = light_sample_count(light);
-        if k + count <= first {
-            k += count;
-            continue;
-        }
+        // This light's samples in the chunk: j in [j_first, j_end).
+        let j_first = max(first, k) - k;
+        let j_end = min(end - k, count);
         // The light's samples share their sequence's shift. (Nested ifs:
         // pruning removes a constant `if`, not a lowered `&&`.)
         var shift = vec2<u32>();
@@ -79,34 +84,32 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
                 shift = sample_shift(pixel, 1u + i);
             }
         }
-        for (var j = 0u; j < count; j++) {
-            if k >= first && k < end {
-                var to_light = vec3<f32>(0.0);
-                var falloff = 0.0;
-                if start.found {
-                    var uv = vec2<f32>(0.5);
-                    if HAS_AREA_LIGHTS {
-                        uv = sample_2d_shifted(shift, pixel, 1u + i, push.pass_index * count + j);
-                    }
-                    let ls = sample_light(light, start.position, uv);
-                    if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
-                        traced += 1u;
-                        if !occluded(start, ls.to_light, ls.distance) {
-                            to_light = ls.to_light;
-                            falloff = ls.falloff;
-                        }
-                    }
+        for (var j = j_first; j < j_end; j++) {
+            var to_light = vec3<f32>(0.0);
+            var falloff = 0.0;
+            if start.found {
+                var uv = vec2<f32>(0.5);
+                if HAS_AREA_LIGHTS {
+                    uv = sample_2d_shifted(shift, pixel, 1u + i, push.pass_index * count + j);
                 }
-                let entry = base + k - first;
-                let value = vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff));
-                if STAGE_WORDS {
-                    queue_words[entry * QUEUE_TEXELS] = stage_words(value);
-                } else {
-                    textureStore(queue, queue_texel(entry, 0u), value);
+                let ls = sample_light(light, start.position, uv);
+                if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
+                    traced += 1u;
+                    if !occluded(start, ls.to_light, ls.distance) {
+                        to_light = ls.to_light;
+                        falloff = ls.falloff;
+                    }
                 }
             }
-            k++;
+            let entry = base + k + j - first;
+            let value = vec4<u32>(bitcast<vec3<u32>>(to_light), bitcast<u32>(falloff));
+            if STAGE_WORDS {
+                queue_words[entry * QUEUE_TEXELS] = stage_words(value);
+            } else {
+                textureStore(queue, queue_texel(entry, 0u), value);
+            }
         }
+        k += count;
     }
     return traced;
 }
