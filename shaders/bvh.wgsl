@@ -3,8 +3,10 @@
 // node's two children: their boxes as 8-bit steps in the node's frame, and
 // a reference to each, a record index or BVH_LEAF | the leaf's first entry
 // of `bvh_prims`. An entry is a triangle index, or a sphere index with
-// PRIM_SPHERE set; the leaf's last entry has PRIM_LAST set. Record 0 is the
-// root's (the root's own box is never tested: its children's lie inside).
+// PRIM_SPHERE set; the leaf's last entry has PRIM_LAST set. A leaf's entries
+// start at a multiple of PRIMS_PER_TEXEL (quantised_bvh::align_leaves), so
+// the traversal loads them a texel at a time. Record 0 is the root's (the
+// root's own box is never tested: its children's lie inside).
 
 // Mirrored by render::layout::BvhNode; fetched by bvh_record.
 struct BvhNode {
@@ -31,10 +33,20 @@ const STACK_REGISTERS: u32 = 4u;
 const BOX_MISS: f32 = 3.4e38;
 // 16-byte texels per record (32 bytes).
 const BVH_RECORD_TEXELS: u32 = 2u;
+// Primitive references per texel of `bvh_prims`.
+const PRIMS_PER_TEXEL: u32 = 4u;
 
 // Records are texels (shaders/texels.wgsl says why).
 @group(0) @binding(9) var bvh_nodes: texture_storage_2d<rgba32uint, read>;
-@group(0) @binding(10) var<storage, read> bvh_prims: array<u32>;
+// The references as texels too: a leaf's first texel holds up to four of
+// its entries, where a storage-buffer load per entry cost a loop over the
+// lanes each (docs/stages.md measures it).
+@group(0) @binding(10) var bvh_prims: texture_storage_2d<rgba32uint, read>;
+
+// Entry `c` (0 to 3) of a texel of references.
+fn texel_entry(four: vec4<u32>, c: u32) -> u32 {
+    return select(select(four.x, four.y, c == 1u), select(four.z, four.w, c == 3u), c >= 2u);
+}
 
 // Record `i`, from its texels: the struct's words in order.
 fn bvh_record(i: u32) -> BvhNode {
@@ -148,15 +160,23 @@ fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
             node_t = near_t;
         }
         if leaf {
-            var i = node & ~BVH_LEAF;
+            var i = (node & ~BVH_LEAF) / PRIMS_PER_TEXEL;
+            var last = false;
             loop {
-                let prim = bvh_prims[i];
-                if (prim & PRIM_SPHERE) != 0u {
-                    closest_sphere(prim & PRIM_INDEX, ray, hit);
-                } else {
-                    closest_triangle(prim & PRIM_INDEX, ray, hit);
+                let four = textureLoad(bvh_prims, texel(i));
+                for (var c = 0u; c < PRIMS_PER_TEXEL; c++) {
+                    let prim = texel_entry(four, c);
+                    if (prim & PRIM_SPHERE) != 0u {
+                        closest_sphere(prim & PRIM_INDEX, ray, hit);
+                    } else {
+                        closest_triangle(prim & PRIM_INDEX, ray, hit);
+                    }
+                    if (prim & PRIM_LAST) != 0u {
+                        last = true;
+                        break;
+                    }
                 }
-                if (prim & PRIM_LAST) != 0u {
+                if last {
                     break;
                 }
                 i++;
@@ -213,17 +233,25 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
                 continue;
             }
         } else {
-            var i = node & ~BVH_LEAF;
+            var i = (node & ~BVH_LEAF) / PRIMS_PER_TEXEL;
+            var last = false;
             loop {
-                let prim = bvh_prims[i];
-                if (prim & PRIM_SPHERE) != 0u {
-                    if sphere_blocks(prim & PRIM_INDEX, ray, t_max, start) {
+                let four = textureLoad(bvh_prims, texel(i));
+                for (var c = 0u; c < PRIMS_PER_TEXEL; c++) {
+                    let prim = texel_entry(four, c);
+                    if (prim & PRIM_SPHERE) != 0u {
+                        if sphere_blocks(prim & PRIM_INDEX, ray, t_max, start) {
+                            return true;
+                        }
+                    } else if triangle_blocks(prim & PRIM_INDEX, ray, t_max, start) {
                         return true;
                     }
-                } else if triangle_blocks(prim & PRIM_INDEX, ray, t_max, start) {
-                    return true;
+                    if (prim & PRIM_LAST) != 0u {
+                        last = true;
+                        break;
+                    }
                 }
-                if (prim & PRIM_LAST) != 0u {
+                if last {
                     break;
                 }
                 i++;

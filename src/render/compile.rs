@@ -884,16 +884,16 @@ mod tests {
         type Case<'a> = (&'a [(&'a str, &'a str)], [&'a str; 5]);
         let cases: [Case; 3] = [
             (
-                // The BVH's records and primitive references swapped.
+                // The BVH's records and the lights swapped.
                 &[
-                    ("@binding(9) var bvh_nodes", "@binding(10) var bvh_nodes"),
+                    ("@binding(9) var bvh_nodes", "@binding(5) var bvh_nodes"),
                     (
-                        "@binding(10) var<storage, read> bvh_prims",
-                        "@binding(9) var<storage, read> bvh_prims",
+                        "@binding(5) var<storage, read> lights",
+                        "@binding(9) var<storage, read> lights",
                     ),
                 ],
                 [
-                    "bvh.wgsl:",
+                    ".wgsl:",
                     "@binding(",
                     "declared as a",
                     "texel image",

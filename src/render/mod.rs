@@ -878,10 +878,7 @@ impl Renderer {
             b(ctx.create_buffer("image", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("counters", BufferUsage::Storage, 16)?),
             texels("BVH nodes", bytemuck::cast_slice(&gpu.bvh_nodes))?,
-            b(storage(
-                "BVH primitives",
-                bytemuck::cast_slice(&gpu.bvh_prims),
-            )?),
+            texels("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
             // Ray-query buffers: placeholders, replaced per Renderer::trace.
             b(ctx.create_buffer("query rays", BufferUsage::Storage, 16)?),
             b(ctx.create_buffer("query hits", BufferUsage::Storage, 16)?),
@@ -921,12 +918,14 @@ impl Renderer {
             )?),
         ];
         debug_assert_eq!(bound.len(), stages::BINDINGS.len());
-        // The records' image holds whole rows of texels (brute force binds
-        // an empty one, which the BVH's memory does not count).
-        let bvh_bytes = match &bound[Binding::BvhNodes as usize] {
+        // The records' and references' images hold whole rows of texels
+        // (brute force binds empty ones, which the BVH's memory does not
+        // count).
+        let image_bytes = |binding: Binding| match &bound[binding as usize] {
             Bound::Image(image) if !gpu.bvh_nodes.is_empty() => image.size() as usize,
             _ => 0,
-        } + std::mem::size_of_val(gpu.bvh_prims.as_slice());
+        };
+        let bvh_bytes = image_bytes(Binding::BvhNodes) + image_bytes(Binding::BvhPrims);
         // First triangle of each triangle-based object, to number AOV
         // primitives within their object.
         let mut next = 0u32;

@@ -78,6 +78,41 @@ pub fn encode(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
 }
 
 /// The one record of a tree that is a single leaf: the leaf on the left.
+/// Each leaf's references moved to start at a multiple of
+/// [`PRIMS_PER_TEXEL`] (zeros between leaves), and the records' leaf
+/// references moved with them, so that the kernel loads a leaf's references
+/// a texel at a time (`shaders/bvh.wgsl`). Returns the new references.
+pub fn align_leaves(records: &mut [BvhNode], prims: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(prims.len() * 2);
+    for record in records.iter_mut() {
+        for child in [&mut record.left, &mut record.right] {
+            if *child == NONE || *child & LEAF == 0 {
+                continue;
+            }
+            let first = (*child & !LEAF) as usize;
+            // (`encode` ends every leaf with PRIM_LAST.)
+            let last = first
+                + prims[first..]
+                    .iter()
+                    .position(|&p| p & PRIM_LAST != 0)
+                    .unwrap_or(0);
+            out.resize(out.len().next_multiple_of(PRIMS_PER_TEXEL), 0);
+            *child = LEAF | out.len() as u32;
+            out.extend_from_slice(&prims[first..=last]);
+        }
+    }
+    out.resize(
+        out.len()
+            .next_multiple_of(PRIMS_PER_TEXEL)
+            .max(PRIMS_PER_TEXEL),
+        0,
+    );
+    out
+}
+
+/// Primitive references per 16-byte texel.
+pub const PRIMS_PER_TEXEL: usize = 4;
+
 fn single_leaf(root: &Node, prims: &mut [u32]) -> Vec<BvhNode> {
     prims[(root.index + root.count - 1) as usize] |= PRIM_LAST;
     vec![record(root, None, LEAF | root.index, NONE)]
@@ -581,5 +616,46 @@ mod tests {
         assert_eq!((records[0].left, records[0].right), (LEAF, NONE));
         assert_eq!(prims[1] & PRIM_LAST, PRIM_LAST);
         assert_eq!(prims[0] & PRIM_LAST, 0);
+    }
+
+    /// The references of a leaf, from its first up to its PRIM_LAST.
+    fn leaf(prims: &[u32], reference: u32) -> &[u32] {
+        let first = (reference & !LEAF) as usize;
+        let n = prims[first..]
+            .iter()
+            .position(|&p| p & PRIM_LAST != 0)
+            .unwrap();
+        &prims[first..=first + n]
+    }
+
+    /// Aligned, every leaf starts at a multiple of PRIMS_PER_TEXEL and holds
+    /// the same references in the same order; interior references and the
+    /// boxes are unchanged, and the references fill whole texels.
+    #[test]
+    fn aligned_leaves_start_on_texels_and_keep_their_references() {
+        for n in [2, 3000, 60_000] {
+            let boxes = crate::bvh::random_boxes(n, 777);
+            let built = Bvh::build_f32_chunked(n, |i| boxes[i].outward_f32());
+            let mut prims = built.prims.clone();
+            let records = encode(&built, &mut prims);
+            let mut aligned = records.clone();
+            let out = align_leaves(&mut aligned, &prims);
+            assert_eq!(out.len() % PRIMS_PER_TEXEL, 0);
+            let mut leaves = 0;
+            for (old, new) in records.iter().zip(&aligned) {
+                assert_eq!((old.origin, old.quantised), (new.origin, new.quantised));
+                for (o, r) in [(old.left, new.left), (old.right, new.right)] {
+                    if o == NONE || o & LEAF == 0 {
+                        assert_eq!(o, r);
+                        continue;
+                    }
+                    leaves += 1;
+                    assert_eq!((r & !LEAF) as usize % PRIMS_PER_TEXEL, 0);
+                    assert_eq!(leaf(&prims, o), leaf(&out, r));
+                }
+            }
+            let lasts = prims.iter().filter(|&&p| p & PRIM_LAST != 0).count();
+            assert_eq!(leaves, lasts, "{n}");
+        }
     }
 }

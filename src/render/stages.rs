@@ -289,7 +289,7 @@ pub const BINDINGS: [BindingInfo; 29] = {
         b(Binding::Image, "image", StorageReadWrite),
         b(Binding::Counters, "counters", StorageReadWrite),
         b(Binding::BvhNodes, "bvh_nodes", TexelImage),
-        b(Binding::BvhPrims, "bvh_prims", StorageReadOnly),
+        b(Binding::BvhPrims, "bvh_prims", TexelImage),
         b(Binding::QueryRays, "query_rays", StorageReadOnly),
         b(Binding::QueryHits, "query_hits", StorageReadWrite),
         b(Binding::Aovs, "aovs", StorageReadWrite),

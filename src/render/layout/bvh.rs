@@ -49,7 +49,7 @@ impl GpuScene {
     pub fn encode_bvh(&mut self, built: &Chunked) {
         let mut prims = built.prim_refs(self.triangles.len());
         self.bvh_nodes = crate::render::quantised_bvh::encode(built, &mut prims);
-        self.bvh_prims = prims;
+        self.bvh_prims = crate::render::quantised_bvh::align_leaves(&mut self.bvh_nodes, &prims);
         self.bvh_depth = built.depth;
         self.globals.num_bvh_nodes = self.bvh_nodes.len() as u32;
     }

@@ -448,6 +448,10 @@ mod tests {
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
             ("UNIFORM_LIGHTS", lights::UNIFORM_LIGHTS as u32),
+            (
+                "PRIMS_PER_TEXEL",
+                crate::render::quantised_bvh::PRIMS_PER_TEXEL as u32,
+            ),
             ("TEXEL_ROW", crate::vulkan::TEXEL_ROW),
             ("RECORD_TEXELS", super::super::tiles::RECORD_TEXELS as u32),
             ("KIND_BITS", super::super::KIND_BITS),
