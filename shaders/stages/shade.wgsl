@@ -119,6 +119,13 @@ fn penumbra_texel(i: u32) -> vec2<u32> {
     return vec2<u32>(i & ((1u << penumbra_TEXEL_ROW_SHIFT) - 1u), i >> penumbra_TEXEL_ROW_SHIFT);
 }
 
+// render.wgsl's stage_words (this module cannot call the engine's; the
+// words-against-texel-stores test of tests/gpu/stages.rs fails if the two
+// pack differently).
+fn penumbra_stage_words(v: vec4<u32>) -> vec2<u64> {
+    return vec2<u64>(u64(v.x) | (u64(v.y) << 32u), u64(v.z) | (u64(v.w) << 32u));
+}
+
 fn penumbra_f3(t: vec4<u32>) -> vec3<f32> {
     return bitcast<vec3<f32>>(t.xyz);
 }
@@ -247,8 +254,7 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
         value += penumbra_image[at];
     }
     if penumbra_STAGE_WORDS {
-        let w = bitcast<vec4<u32>>(value);
-        penumbra_image_words[at] = vec2<u64>(u64(w.x) | (u64(w.y) << 32u), u64(w.z) | (u64(w.w) << 32u));
+        penumbra_image_words[at] = penumbra_stage_words(bitcast<vec4<u32>>(value));
     } else {
         penumbra_image[at] = value;
     }

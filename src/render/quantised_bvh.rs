@@ -77,7 +77,6 @@ pub fn encode(built: &Chunked, prims: &mut [u32]) -> Vec<BvhNode> {
     records
 }
 
-/// The one record of a tree that is a single leaf: the leaf on the left.
 /// Each leaf's references moved to start at a multiple of
 /// [`PRIMS_PER_TEXEL`] (zeros between leaves), and the records' leaf
 /// references moved with them, so that the kernel loads a leaf's references
@@ -113,6 +112,7 @@ pub fn align_leaves(records: &mut [BvhNode], prims: &[u32]) -> Vec<u32> {
 /// Primitive references per 16-byte texel.
 pub const PRIMS_PER_TEXEL: usize = 4;
 
+/// The one record of a tree that is a single leaf: the leaf on the left.
 fn single_leaf(root: &Node, prims: &mut [u32]) -> Vec<BvhNode> {
     prims[(root.index + root.count - 1) as usize] |= PRIM_LAST;
     vec![record(root, None, LEAF | root.index, NONE)]

@@ -36,6 +36,7 @@ pub struct Light {
 /// buffer): 128 records of 112 bytes stay within the 16 KiB that Vulkan
 /// guarantees a uniform buffer binding.
 pub const UNIFORM_LIGHTS: usize = 128;
+const _: () = assert!(UNIFORM_LIGHTS * std::mem::size_of::<Light>() <= 16384);
 
 /// The uniform light block: the first [`UNIFORM_LIGHTS`] of `lights`,
 /// zeros after them.
