@@ -11,9 +11,17 @@
 //! a primitive test cost about the same in our kernel), 16 bins (Wald found
 //! 16 to 32 bins within a few percent of a full sweep) and at most
 //! [`MAX_LEAF`] primitives per leaf; nodes with fewer than 16 primitives use
-//! that many bins. Nodes of at most [`SMALL_NODE`] primitives split at the
-//! median centroid of their widest axis: near the leaves SAH gains little
-//! and its fixed cost per node dominates the build. With 8 the bunny's
+//! that many bins. A plane through the centroids cannot separate a huge
+//! primitive from small ones whose centroids lie beside its own (a ground
+//! quad under a mesh that stands on it): the binned split would peel off a
+//! thin slice of the mesh with the quad, level after level, and every ray
+//! that meets the quad would descend all those levels. So a node whose best
+//! plane leaves a child almost as large as the node (`LARGE_CHILD`) also
+//! prices putting its large primitives on a side of their own
+//! (`size_split`), by the same SAH cost. Nodes of at most [`SMALL_NODE`]
+//! primitives split at the median centroid of their widest axis: near the
+//! leaves SAH gains little and its fixed cost per node dominates the
+//! build. With 8 the bunny's
 //! frames match a pure SAH tree within the timing noise (12 cost a few
 //! per cent). Subtrees are built in parallel with rayon, and so is the
 //! binning of large nodes.
@@ -663,7 +671,7 @@ fn split(
     // one pass over their primitives instead of two. (The counts are then
     // the sample's: fine for choosing the plane, and the leaf test below
     // only concerns nodes of at most MAX_LEAF.)
-    let stride = if n > sample_above { n / SAMPLES } else { 1 };
+    let mut stride = if n > sample_above { n / SAMPLES } else { 1 };
     let mut bins = EMPTY_BINS;
     bin(order, stride, cb, scale, nb, &mut bins);
     // A few huge primitives among many small ones (a ground quad beside a
@@ -672,11 +680,13 @@ fn split(
     if stride > 1 {
         let sampled = bins.bounds[0].iter().fold(Box32::EMPTY, |a, b| a.union(*b));
         if sampled.half_area() < SAMPLE_COVER * bounds.half_area() {
+            stride = 1;
             bins = EMPTY_BINS;
-            bin(order, 1, cb, scale, nb, &mut bins);
+            bin(order, stride, cb, scale, nb, &mut bins);
         }
     }
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
+    // (cost, axis, split bin, the larger child's half area)
+    let mut best: Option<(f32, usize, usize, f32)> = None;
     for axis in (0..3).filter(|&a| scale[a] > 0.0) {
         let (boxes, counts) = (&bins.bounds[axis], &bins.count[axis]);
         // Sweep from the right to get the area and count right of each plane.
@@ -696,15 +706,15 @@ fn split(
             if cnt == 0 || right_count[k] == 0 {
                 continue;
             }
-            let cost =
-                acc.half_area_unchecked() * cnt as f32 + right_area[k] * right_count[k] as f32;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, k));
+            let left_area = acc.half_area_unchecked();
+            let cost = left_area * cnt as f32 + right_area[k] * right_count[k] as f32;
+            if best.is_none_or(|(c, ..)| cost < c) {
+                best = Some((cost, axis, k, left_area.max(right_area[k])));
             }
         }
     }
     let area = bounds.half_area();
-    let Some((cost, axis, k)) = best else {
+    let Some((mut cost, axis, k, larger)) = best else {
         // All centroids coincide: split by count if the leaf is too big.
         if n <= MAX_LEAF {
             return None;
@@ -712,6 +722,21 @@ fn split(
         let (l, r) = order.split_at(n / 2);
         return Some((n / 2, (bounds_of(l), bounds_of(r))));
     };
+    // A child nearly as large as the node holds a primitive almost as large
+    // (a ground quad beside a dense mesh), which no plane through the
+    // centroids can separate from its small neighbours: each level would
+    // peel off another thin slice of them, and every ray that meets the
+    // large primitive would descend through all those levels. Try putting
+    // the large primitives on a side of their own.
+    let mut by_size = None;
+    if larger >= LARGE_CHILD * area {
+        if let Some((c, threshold)) = size_split(order, stride, area) {
+            if c < cost {
+                cost = c;
+                by_size = Some(threshold);
+            }
+        }
+    }
     let split_cost = C_TRAV
         + if area > 0.0 {
             cost as f64 / area as f64
@@ -720,6 +745,11 @@ fn split(
         } * C_ISECT;
     if n <= MAX_LEAF && n as f64 * C_ISECT <= split_cost {
         return None;
+    }
+    if let Some(threshold) = by_size {
+        return Some(partition(order, &|p: &Prim| {
+            p.bounds().half_area_unchecked() > threshold
+        }));
     }
     // Left of the plane iff the bin on `axis` is below `k`: for x = (centre
     // - cb.min)·scale that is `!(x >= k)` (NaN and negatives land in bin 0,
@@ -731,6 +761,67 @@ fn split(
     };
     Some(partition(order, &goes_left))
 }
+
+/// The cheapest split of `order` into large primitives (left) and small
+/// ones (right), by the SAH cost `A_L·N_L + A_R·N_R` that [`split`] sweeps,
+/// over every primitive or, with `stride` above 1, over one of each run of
+/// `stride` (the counts are then a sample's, as the bins' are). A primitive
+/// is large when its box's half area exceeds a share of the node's half
+/// area `area`, one of [`LARGE_SHARES`]; returns the best cost with its
+/// least large half area, or `None` when no share puts primitives on both
+/// sides.
+fn size_split(order: &[Prim], stride: usize, area: f32) -> Option<(f32, f32)> {
+    type Sizes = [(Box32, u32, Box32, u32); LARGE_SHARES.len()];
+    let thresholds = LARGE_SHARES.map(|s| s * area);
+    let empty: Sizes = [(Box32::EMPTY, 0, Box32::EMPTY, 0); LARGE_SHARES.len()];
+    let add = |mut acc: Sizes, p: &Prim| {
+        let b = p.bounds();
+        let a = b.half_area_unchecked();
+        for (side, &t) in acc.iter_mut().zip(&thresholds) {
+            if a > t {
+                side.0 = side.0.union(b);
+                side.1 += 1;
+            } else {
+                side.2 = side.2.union(b);
+                side.3 += 1;
+            }
+        }
+        acc
+    };
+    let merge = |mut a: Sizes, b: Sizes| {
+        for (x, y) in a.iter_mut().zip(b) {
+            *x = (x.0.union(y.0), x.1 + y.1, x.2.union(y.2), x.3 + y.3);
+        }
+        a
+    };
+    let sides = if stride > 1 {
+        let sample = order.chunks(stride).enumerate();
+        sample.fold(empty, |acc, (r, run)| add(acc, &run[jitter(r) % run.len()]))
+    } else if order.len() < PARALLEL_THRESHOLD * 4 {
+        order.iter().fold(empty, add)
+    } else {
+        // Min, max and integer counts: the same result however rayon
+        // splits the work.
+        order.par_iter().fold(|| empty, add).reduce(|| empty, merge)
+    };
+    sides
+        .iter()
+        .zip(thresholds)
+        .filter(|(side, _)| side.1 > 0 && side.3 > 0)
+        .map(|(side, t)| {
+            let cost = side.0.half_area_unchecked() * side.1 as f32
+                + side.2.half_area_unchecked() * side.3 as f32;
+            (cost, t)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// A node whose best plane leaves a child of at least this share of its
+/// half area also tries [`size_split`].
+const LARGE_CHILD: f32 = 0.8;
+/// The shares of a node's half area above which [`size_split`] counts a
+/// primitive as large.
+const LARGE_SHARES: [f32; 4] = [1.0 / 2.0, 1.0 / 8.0, 1.0 / 32.0, 1.0 / 128.0];
 
 /// Partitions `order` in place by `goes_left` (Hoare: swap only misplaced
 /// pairs), gathering both sides' bounds on the way, so the children need
@@ -1144,6 +1235,31 @@ mod tests {
             .unwrap()
             .install(|| Bvh::build(&boxes));
         assert_eq!(one, bvh);
+    }
+
+    #[test]
+    fn large_primitives_get_a_side_of_their_own() {
+        // The ground quad under a dense shell: its two triangles are one
+        // leaf right under the root (a ray that meets only the ground tests
+        // one record), whether the root bins every primitive or a sample.
+        for n in [1_000, 20_000, 150_000] {
+            let boxes = shell_and_ground(n);
+            let bvh = Bvh::build(&boxes);
+            let root = bvh.nodes[0];
+            assert_eq!(root.count, 0);
+            let ground = [n as u32 / 3, n as u32 / 3 + 1];
+            let leaf_of = |i: usize| {
+                let node = bvh.nodes[i];
+                let prims = &bvh.prims[node.index as usize..][..node.count as usize];
+                let mut prims = prims.to_vec();
+                prims.sort_unstable();
+                prims
+            };
+            assert!(
+                leaf_of(1) == ground || leaf_of(root.index as usize) == ground,
+                "{n} primitives: the ground is not a child of the root"
+            );
+        }
     }
 
     #[test]
