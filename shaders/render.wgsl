@@ -47,6 +47,14 @@ override FUSED_SHADOWS: bool = true;
 // vulkan::Context::stage_words, where a texel store costs several buffer
 // stores), rather than with textureStore.
 override STAGE_WORDS: bool = false;
+// A stage invocation's place in its workgroup's 8×8 block of pixels comes
+// from its subgroup and lane (vulkan::Context::lane_pixels: a CPU device,
+// whose subgroups fill a workgroup in order), not from
+// local_invocation_index. lavapipe computes the local invocation ids of
+// every lane with integer divisions by the workgroup's size, a runtime
+// value there, at the start of every SIMD group; the subgroup ids cost it
+// nothing (docs/stages.md).
+override LANE_PIXELS: bool = false;
 
 // A texel's four words as the two 64-bit words (low word first: the same
 // bytes) that the stages store with STAGE_WORDS. lavapipe stores a vector
@@ -128,12 +136,32 @@ const FAR: f32 = 3.0e38;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 2>;
 var<immediate> push: PushConstants;
 
-// The pixel of this invocation (its dispatch covers a band of the tile), and
-// whether it lies in the image.
-fn stage_pixel(gid: vec3<u32>) -> vec2<u32> {
-    return gid.xy + push.origin;
+// Where a stage invocation is: the stages run workgroups of 64 invocations
+// in one dimension, one 8×8 block of pixels each (render::TILE); subgroup
+// ids need a one-dimensional workgroup. Each stage's entry point takes
+// these builtins as arguments of its own: as members of a struct argument
+// (naga 30, Mesa 25.0.7) the shade stage placed only every eighth row.
+struct StageInvocation {
+    workgroup: vec3<u32>,
+    index: u32,
+    subgroup: u32,
+    subgroup_size: u32,
+    lane: u32,
 }
 
+// The pixel of this invocation (its dispatch covers a band of the tile):
+// its block's, and in the block row by row by its index (LANE_PIXELS says
+// which index).
+fn stage_pixel(inv: StageInvocation) -> vec2<u32> {
+    var index = inv.index;
+    if LANE_PIXELS {
+        index = inv.subgroup * inv.subgroup_size + inv.lane;
+    }
+    let block = inv.workgroup.xy * 8u + push.origin;
+    return block + vec2<u32>(index & 7u, index >> 3u);
+}
+
+// Whether a pixel lies in the image.
 fn in_image(px: vec2<u32>) -> bool {
     return px.x < push.size.x && px.y < push.size.y;
 }

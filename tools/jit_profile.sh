@@ -12,6 +12,9 @@
 #     storing the whole vector to the stack, writing one lane and reloading it;
 #   - the share of samples in the kernel and inside the per-lane loops, by the storage-buffer
 #     slot of the lavapipe context they read;
+#   - per generated function (the stages' kernels, lavapipe's image functions), hottest first:
+#     its share of the samples and its integer divisions (`div`), with the share of its samples
+#     from its first division to its last, where lavapipe computes the invocation ids;
 #   - the instruction sets of all the generated code (every anonymous executable mapping, each
 #     stage's pipeline among them): EVEX-encoded instructions (AVX-512's encoding), those on
 #     512-bit zmm registers, on the opmask registers k1-k7 and on registers 16-31. All four are
@@ -37,11 +40,12 @@ fi
 work=$(mktemp -d)
 [ -z "${JIT_PROFILE_KEEP:-}" ] || echo "jit_profile.sh: keeping $work" >&2
 trap 'kill "$pid" 2>/dev/null || true; [ -n "${JIT_PROFILE_KEEP:-}" ] || rm -rf "$work"' EXIT
-# A warm-up render fills the shader cache; the profiled one renders passes for long enough.
+# A warm-up render fills the shader cache; the profiled one renders passes for long enough (it
+# is killed once sampled and dumped).
 # Both at 256 bits, lavapipe's default, which auto would raise to 512 for 64 passes on a CPU
 # with AVX-512; an LP_NATIVE_VECTOR_WIDTH in the environment still wins.
 env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 2 -o "$work/o.png" >/dev/null
-env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 64 -o "$work/o.png" >"$work/render.log" &
+env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 1024 -o "$work/o.png" >"$work/render.log" &
 pid=$!
 sleep 4
 perf record -q -e cpu-clock -p "$pid" -o "$work/perf.data" -- sleep 4 >/dev/null 2>&1
@@ -102,10 +106,35 @@ print(f"samples inside per-lane loops: {100 * inside / max(in_jit, 1):.1f}% of t
 for k, v in by_slot.most_common(8):
     print(f"  context offsets {k}: {100 * v / max(in_jit, 1):.1f}%")
 
+# Each mapping's samples and integer divisions.
+maps = [l.split() for l in open(f"{work}/jit_maps")]
+def listing(a):
+    out = []
+    for line in open(f"{work}/jit-{a}.s"):
+        m = re.match(r"\s*([0-9a-f]+):\s+(?:[0-9a-f]{2} )+\s*(\S.*)", line)
+        if m:
+            out.append((int(m.group(1), 16), m.group(2)))
+    return out
+all_ips = collections.Counter(int(s[0], 16) for s in samples)
+hot = []
+for a, b in maps:
+    lo, hi = int(a, 16), int(b, 16)
+    n = sum(v for k, v in all_ips.items() if lo <= k < hi)
+    hot.append((n, a, hi - lo))
+print("generated functions by samples (share of all; integer divisions; share of its samples in them):")
+for n, a, size in sorted(hot, reverse=True)[:4]:
+    code = listing(a)
+    divs = [i for i, (_, t) in enumerate(code) if re.match(r"div\s", t)]
+    at_divs = 0
+    if divs:
+        first, last = code[divs[0]][0], code[min(divs[-1] + 1, len(code) - 1)][0]
+        at_divs = sum(v for k, v in all_ips.items() if first <= k <= last)
+    print(f"  {size} bytes: {100 * n / max(total, 1):.1f}%; {len(divs)} divisions, "
+          f"{100 * at_divs / max(n, 1):.1f}%")
+
 # Instruction sets, over every mapping. In 64-bit mode a 0x62 byte that opens an instruction
 # (after an optional 0x67 address-size prefix, the only legacy prefix EVEX allows) is the
 # EVEX prefix: VEX-encoded AVX2 code never starts with it.
-maps = [l.split() for l in open(f"{work}/jit_maps")]
 n = evex = zmm = kmask = high = 0
 for a, _ in maps:
     for line in open(f"{work}/jit-{a}.s"):

@@ -23,8 +23,14 @@ fn store_record(slot: u32, i: u32, value: vec4<u32>) {
 // Linear RGB; alpha is 1 where a primary ray hit something, else 0.
 @group(0) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
 
-@compute @workgroup_size(8, 8, 1)
-fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+@compute @workgroup_size(64, 1, 1)
+fn hit_stage(
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+    @builtin(local_invocation_index) index: u32,
+    @builtin(subgroup_id) subgroup: u32,
+    @builtin(subgroup_size) subgroup_size: u32,
+    @builtin(subgroup_invocation_id) lane: u32,
+) {
     // Before any branch (see first_light).
     if FUSED_SHADOWS {
         first_light = lights[0];
@@ -34,7 +40,7 @@ fn hit_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (push.flags & FLAG_WARM_UP) != 0u {
         return;
     }
-    let px = stage_pixel(gid);
+    let px = stage_pixel(StageInvocation(workgroup, index, subgroup, subgroup_size, lane));
     var primary = 0u;
     var traced = 0u;
     if in_image(px) {

@@ -98,8 +98,9 @@ override penumbra_HAS_CHECKER: bool = true;
 // with them, or with attributes or textures, the records have texel 3.
 override penumbra_HAS_PLANES: bool = true;
 override penumbra_HAS_SPHERES: bool = true;
-// render.wgsl's STAGE_WORDS (compile.rs: SHADE_STAGE_WORDS).
+// render.wgsl's STAGE_WORDS and LANE_PIXELS (compile.rs: SHADE_SETTINGS).
 override penumbra_STAGE_WORDS: bool = false;
+override penumbra_LANE_PIXELS: bool = false;
 
 // stages/records.wgsl's record_coords: whether the records have texel 3.
 fn penumbra_record_coords() -> bool {
@@ -130,8 +131,16 @@ fn penumbra_f3(t: vec4<u32>) -> vec3<f32> {
     return bitcast<vec3<f32>>(t.xyz);
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+// The arguments of render.wgsl's StageInvocation; the pixel as its
+// stage_pixel finds it.
+@compute @workgroup_size(64, 1, 1)
+fn penumbra_shade_stage(
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+    @builtin(local_invocation_index) index: u32,
+    @builtin(subgroup_id) subgroup: u32,
+    @builtin(subgroup_size) subgroup_size: u32,
+    @builtin(subgroup_invocation_id) lane: u32,
+) {
     let push = penumbra_push;
     // Before any branch: lavapipe loads a uniform once per SIMD group only
     // outside branches and loops (shaders/lights.wgsl's first_light).
@@ -139,7 +148,11 @@ fn penumbra_shade_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (push.flags & penumbra_FLAG_WARM_UP) != 0u {
         return;
     }
-    let px = gid.xy + push.origin;
+    var in_block = index;
+    if penumbra_LANE_PIXELS {
+        in_block = subgroup * subgroup_size + lane;
+    }
+    let px = workgroup.xy * 8u + push.origin + vec2<u32>(in_block & 7u, in_block >> 3u);
     if px.x >= push.size.x || px.y >= push.size.y {
         return;
     }

@@ -19,14 +19,20 @@
 // The queue's memory as words (STAGE_WORDS: render.wgsl).
 @group(0) @binding(25) var<storage, read_write> queue_words: array<vec2<u64>>;
 
-@compute @workgroup_size(8, 8, 1)
-fn shadow_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+@compute @workgroup_size(64, 1, 1)
+fn shadow_stage(
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+    @builtin(local_invocation_index) index: u32,
+    @builtin(subgroup_id) subgroup: u32,
+    @builtin(subgroup_size) subgroup_size: u32,
+    @builtin(subgroup_invocation_id) lane: u32,
+) {
     // Before any branch (see first_light).
     first_light = lights[0];
     if (push.flags & FLAG_WARM_UP) != 0u {
         return;
     }
-    let px = stage_pixel(gid);
+    let px = stage_pixel(StageInvocation(workgroup, index, subgroup, subgroup_size, lane));
     var traced = 0u;
     if in_image(px) {
         let slot = tile_slot(px);

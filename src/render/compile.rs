@@ -372,13 +372,14 @@ impl Assembled {
         constants.insert("SHADOW_EPSILON".into(), epsilon);
         constants.insert("SAMPLER".into(), kernel.sampler as u32 as f64);
         // The shade stage's overrides ([`shade_override_values`]), and its
-        // name for STAGE_WORDS.
+        // names for the settings it depends on.
         for (name, on) in shade_override_values(&key.features) {
             let on = on || !kernel.specialise;
             constants.insert(name.into(), if on { 1.0 } else { 0.0 });
         }
-        let words = key.settings.stage_words;
-        constants.insert(SHADE_STAGE_WORDS.into(), if words { 1.0 } else { 0.0 });
+        for (name, on) in shade_setting_values(&key.settings) {
+            constants.insert(name.into(), if on { 1.0 } else { 0.0 });
+        }
         // Each stage declares only the overrides its files use; naga refuses
         // values for any other.
         constants.retain(|name, _| {
@@ -556,6 +557,10 @@ pub struct Settings {
     /// storage-buffer words over the texel images' memory
     /// (`vulkan::Context::stage_words`), not with texel stores.
     pub stage_words: bool,
+    /// A stage invocation finds its pixel in its workgroup's block by its
+    /// subgroup and lane (`vulkan::Context::lane_pixels`), not by its
+    /// index in the workgroup, which lavapipe computes with divisions.
+    pub lane_pixels: bool,
 }
 
 impl Settings {
@@ -569,6 +574,7 @@ impl Settings {
             aov,
             fused_shadows: super::tiles::one_chunk(light_samples),
             stage_words: false,
+            lane_pixels: false,
         }
     }
 }
@@ -586,12 +592,13 @@ pub struct StageKernel {
 }
 
 /// The WGSL `override` for each render setting, as in `shaders/render.wgsl`.
-pub fn setting_values(s: &Settings) -> [(&'static str, bool); 4] {
+pub fn setting_values(s: &Settings) -> [(&'static str, bool); 5] {
     [
         ("PIXEL_JITTER", s.pixel_jitter),
         ("HAS_AOV", s.aov),
         ("FUSED_SHADOWS", s.fused_shadows),
         ("STAGE_WORDS", s.stage_words),
+        ("LANE_PIXELS", s.lane_pixels),
     ]
 }
 
@@ -621,10 +628,16 @@ pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
     ]
 }
 
-/// The shade stage's name (`shaders/stages/shade.wgsl`) for the setting
-/// `STAGE_WORDS` of [`setting_values`]: it stores its colours as 64-bit
-/// words.
-pub const SHADE_STAGE_WORDS: &str = "penumbra_STAGE_WORDS";
+/// The shade stage's `override` (`shaders/stages/shade.wgsl`) for each
+/// setting it depends on, named as in [`setting_values`] with `penumbra_`
+/// before: it stores its colours as 64-bit words (`STAGE_WORDS`), and finds
+/// its pixel by subgroup and lane (`LANE_PIXELS`).
+pub fn shade_setting_values(s: &Settings) -> [(&'static str, bool); 2] {
+    [
+        ("penumbra_STAGE_WORDS", s.stage_words),
+        ("penumbra_LANE_PIXELS", s.lane_pixels),
+    ]
+}
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
 pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
@@ -746,15 +759,38 @@ mod tests {
         let mut table: Vec<String> = shade_override_values(&Features::default())
             .iter()
             .map(|(n, _)| n.to_string())
-            .chain([SHADE_STAGE_WORDS.to_string()])
+            .chain(
+                shade_setting_values(&Settings::default())
+                    .iter()
+                    .map(|(n, _)| n.to_string()),
+            )
             .collect();
         table.sort();
         assert_eq!(wgsl, table);
-        // Its stage-words override is the engine's setting of that name.
-        let setting = SHADE_STAGE_WORDS.strip_prefix("penumbra_").unwrap();
-        assert!(setting_values(&Settings::default())
-            .iter()
-            .any(|(n, _)| *n == setting));
+        // Each setting's override is the engine's of that name, on for the
+        // same setting: set one at a time and compare.
+        let on = |names: &[(&str, bool)], prefix: &str| -> Vec<String> {
+            names
+                .iter()
+                .filter(|(_, on)| *on)
+                .map(|(n, _)| format!("{prefix}{n}"))
+                .collect()
+        };
+        let one_at_a_time = [
+            Settings {
+                stage_words: true,
+                ..Settings::default()
+            },
+            Settings {
+                lane_pixels: true,
+                ..Settings::default()
+            },
+        ];
+        for s in one_at_a_time {
+            let shade = on(&shade_setting_values(&s), "");
+            assert_eq!(shade.len(), 1, "{s:?}");
+            assert_eq!(shade, on(&setting_values(&s), "penumbra_"), "{s:?}");
+        }
         // Every feature flag of the table maps to the engine's override of
         // the same feature: set one feature at a time and compare.
         let engine = |f: &Features| -> Vec<&str> {

@@ -40,7 +40,9 @@ use stages::{Binding, Stage};
 use tiles::TilePlan;
 pub use trace::{HitKind, TraceHit, TraceRay};
 
-/// Pixels per workgroup side, as in `@workgroup_size(8, 8, 1)`.
+/// Pixels per side of a workgroup's block: the stages' workgroups of 64
+/// invocations (`@workgroup_size(64, 1, 1)`) each take an 8×8 block
+/// (`shaders/render.wgsl`'s `stage_pixel`).
 const TILE: u32 = 8;
 
 /// Bits of a hit record's kind: the rest of its word holds the scene object
@@ -323,6 +325,9 @@ pub struct Renderer {
     /// Whether the stages may write their images as words where the device
     /// allows it ([`Renderer::set_stage_words`]).
     allow_stage_words: bool,
+    /// Whether the stages may find their pixels by subgroup and lane where
+    /// the device allows it ([`Renderer::set_lane_pixels`]).
+    allow_lane_pixels: bool,
     /// Set by a successful [`Renderer::reload_shaders`], cleared by an
     /// upload: renders may then reuse the hit records they find (every other
     /// render traces its rays, and counts them).
@@ -417,6 +422,7 @@ impl Renderer {
             profile_stages: false,
             fuse_shadows: true,
             allow_stage_words: true,
+            allow_lane_pixels: true,
             uploads: 0,
             stage_memory: tiles::DEFAULT_STAGE_MEMORY,
             band_bytes: u64::MAX,
@@ -467,6 +473,35 @@ impl Renderer {
     /// Whether this renderer's stages write words ([`Renderer::set_stage_words`]).
     pub fn stage_words(&self) -> bool {
         self.allow_stage_words && self.context.stage_words()
+    }
+
+    /// Whether a stage invocation finds its pixel in its workgroup's block
+    /// by its subgroup and lane ([`Settings::lane_pixels`]). On by default
+    /// where the device allows it (`vulkan::Context::lane_pixels`: lavapipe);
+    /// off, by its index in the workgroup: the same image, bit for bit
+    /// (tests, and benchmarks of the difference).
+    pub fn set_lane_pixels(&mut self, on: bool) {
+        if on != self.allow_lane_pixels {
+            self.allow_lane_pixels = on;
+            // The shade pipelines' cache key holds no settings.
+            self.shade_pipelines.clear();
+        }
+    }
+
+    /// Whether this renderer's stages find their pixels by subgroup and lane
+    /// ([`Renderer::set_lane_pixels`]).
+    pub fn lane_pixels(&self) -> bool {
+        self.allow_lane_pixels && self.context.lane_pixels()
+    }
+
+    /// `settings` with the settings this renderer and its device decide:
+    /// stage words and lane pixels.
+    fn with_device(&self, settings: Settings) -> Settings {
+        Settings {
+            stage_words: self.stage_words(),
+            lane_pixels: self.lane_pixels(),
+            ..settings
+        }
     }
 
     /// Sets the bound on one tile's stage memory (at least
@@ -642,10 +677,7 @@ impl Renderer {
         }
         let key = StageKernel {
             features: variant,
-            settings: Settings {
-                stage_words: self.stage_words(),
-                ..Settings::default()
-            },
+            settings: self.with_device(Settings::default()),
             ..StageKernel::default()
         };
         let spirv = source
@@ -1120,7 +1152,7 @@ impl Renderer {
         }
         let mut settings = Settings::new(sampling.spp, with_aovs, scene.light_samples);
         settings.fused_shadows &= self.fuse_shadows;
-        settings.stage_words = self.stage_words();
+        let settings = self.with_device(settings);
         // The BVH buffers are empty for a scene uploaded for brute force.
         let key_kernel = KernelOptions {
             accel: scene.kernel.accel,

@@ -56,7 +56,7 @@ impl Renderer {
         // Watch renders one sample per pixel without AOVs.
         let mut settings = super::Settings::new(1, false, scene.light_samples);
         settings.fused_shadows &= self.fuse_shadows;
-        settings.stage_words = self.stage_words();
+        let settings = self.with_device(settings);
         let key = super::StageKernel {
             features: scene.features,
             settings,

@@ -77,6 +77,8 @@ pub struct DeviceLimits {
     pub max_memory_allocation_size: u64,
     /// `maxImageDimension2D`: largest width or height of a 2D image, in texels.
     pub max_image_dimension_2d: u32,
+    /// `subgroupSize` (Vulkan 1.1): invocations of a subgroup.
+    pub subgroup_size: u32,
 }
 
 /// Loader, instance and optional validation messenger; destroyed after the device.
@@ -254,6 +256,7 @@ impl InstanceHolder {
             max_push_constants_size: l.max_push_constants_size,
             max_memory_allocation_size: maintenance3.max_memory_allocation_size,
             max_image_dimension_2d: l.max_image_dimension2_d,
+            subgroup_size: subgroup.subgroup_size,
         };
         let queue_family = queue_family as u32;
         Ok(Some(PhysicalDevice {
@@ -344,6 +347,9 @@ pub struct Context {
     /// Whether stage images can be linear images aliased by storage buffers
     /// ([`Context::stage_words`]), probed at creation.
     pub(crate) stage_words: bool,
+    /// Whether a stage invocation may find its pixel by its subgroup and
+    /// lane ([`Context::lane_pixels`]).
+    lane_pixels: bool,
     info: DeviceInfo,
     limits: DeviceLimits,
     /// The staging buffers kept between transfers: upload, readback (`Context::staging`).
@@ -437,6 +443,7 @@ impl Context {
             force_staging: env_flag("PENUMBRA_FORCE_STAGING"),
             texel_format_features,
             stage_words: false,
+            lane_pixels: false,
             info: physical.info,
             limits: physical.limits,
             staging: Mutex::new([None, None]),
@@ -451,7 +458,26 @@ impl Context {
             && shader_int64
             && physical_is_cpu(&context.info)
             && context.probe_stage_words()?;
+        let subgroup = context.limits.subgroup_size;
+        context.lane_pixels = physical_is_cpu(&context.info) && subgroup > 0 && 64 % subgroup == 0;
         Ok(context)
+    }
+
+    /// Whether the stages' workgroups of 64 invocations are whole subgroups
+    /// in order, so that `subgroup_id · subgroup_size +
+    /// subgroup_invocation_id` numbers a workgroup's invocations from 0 to
+    /// 63 (`shaders/render.wgsl`'s `LANE_PIXELS`).
+    ///
+    /// Why: lavapipe computes every lane's `local_invocation_index` (and
+    /// `global_invocation_id`) with integer divisions by the workgroup's
+    /// size at the start of each SIMD group, a sixth of the shade stage's
+    /// time on the bunny, while its subgroup ids are a loop counter and a
+    /// constant vector. A CPU device (lavapipe) runs a workgroup as its
+    /// SIMD groups one after another, each a whole subgroup of the vector
+    /// width (8 or 16 lanes, dividing 64). Vulkan 1.1 promises neither on a
+    /// GPU, where the index costs nothing, so a GPU keeps the index.
+    pub fn lane_pixels(&self) -> bool {
+        self.lane_pixels
     }
 
     /// The device this context runs on.

@@ -6,7 +6,9 @@
 //! lavapipe the stages write their records as storage-buffer words over the
 //! memory of the texel images the next stage reads
 //! (`render::Settings::stage_words`); that image must equal the one written
-//! with texel stores, bit for bit.
+//! with texel stores, bit for bit. There, too, an invocation finds its pixel
+//! by its subgroup and lane (`render::Settings::lane_pixels`); that image
+//! must equal the one placed by the invocation's index, bit for bit.
 
 use crate::support;
 
@@ -21,6 +23,7 @@ impl Drop for Restore<'_> {
     fn drop(&mut self) {
         self.0.set_fused_shadows(true);
         self.0.set_stage_words(true);
+        self.0.set_lane_pixels(true);
         self.0.set_profile_stages(false);
     }
 }
@@ -142,6 +145,42 @@ fn records_written_as_words_give_the_texel_stores_image() {
         assert_eq!(
             differ, 0,
             "{what}: {differ} pixels differ with texel stores"
+        );
+    }
+}
+
+#[test]
+fn pixels_by_subgroup_and_lane_give_the_invocation_index_image() {
+    let mut r = Restore(support::renderer());
+    // lavapipe's subgroups fill a workgroup in order; its default.
+    let cpu = r.0.device().device_type == "CPU";
+    assert_eq!(r.0.lane_pixels(), cpu, "{:?}", r.0.device());
+    // Every stage: fused shadows (one chunk) and the shadow stage (two
+    // chunks), several shade programs, textures; sizes that are not whole
+    // 8×8 blocks.
+    let mut two_chunks = scene("area_lights.json", 93, 61);
+    two_chunks.lights[0].kind.set_samples(70);
+    let cases = [
+        ("showcase.json", scene("showcase.json", 157, 118)),
+        ("area_lights.json, 78 samples", two_chunks),
+        ("textured.json", scene("textured.json", 160, 120)),
+        ("shaders.json", scene("shaders.json", 101, 77)),
+    ];
+    for (what, scene) in cases {
+        let mut frame = |lanes: bool| {
+            r.0.set_lane_pixels(lanes);
+            assert_eq!(r.0.lane_pixels(), lanes && cpu);
+            r.0.render(&scene).expect("render")
+        };
+        let lanes = frame(cpu);
+        let index = frame(false);
+        assert!(lanes.stats.shadow_rays > 0, "{what}: no shadow rays");
+        assert!(lanes.image.pixels.iter().any(|p| p[3] > 0.0), "{what}");
+        let (a, b) = (bits(&lanes), bits(&index));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        assert_eq!(
+            differ, 0,
+            "{what}: {differ} pixels differ from the index's placement"
         );
     }
 }
