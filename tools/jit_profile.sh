@@ -12,9 +12,10 @@
 #     storing the whole vector to the stack, writing one lane and reloading it;
 #   - the share of samples in the kernel and inside the per-lane loops, by the storage-buffer
 #     slot of the lavapipe context they read;
-#   - per generated function (the stages' kernels, lavapipe's image functions), hottest first:
-#     its share of the samples and its integer divisions (`div`), with the share of its samples
-#     from its first division to its last, where lavapipe computes the invocation ids;
+#   - per mapping of generated code (a stage's kernel, sometimes several in one mapping;
+#     lavapipe's image functions), hottest first: its share of the samples and its integer
+#     divisions (`div`), with the share of its samples from its first division to its last,
+#     where lavapipe computes the invocation ids;
 #   - the instruction sets of all the generated code (every anonymous executable mapping, each
 #     stage's pipeline among them): EVEX-encoded instructions (AVX-512's encoding), those on
 #     512-bit zmm registers, on the opmask registers k1-k7 and on registers 16-31. All four are
@@ -73,11 +74,15 @@ echo "driver: $(env "${env[@]}" "$bin" devices | grep -i llvmpipe | head -n1 | s
 python3 - "$work" "$start" "$end" <<'EOF'
 import collections, re, sys
 work, start, end = sys.argv[1], int(sys.argv[2], 16), int(sys.argv[3], 16)
-rows = []
-for line in open(f"{work}/jit.s"):
-    m = re.match(r"\s*([0-9a-f]+):\s+(?:[0-9a-f]{2} )+\s*(\S.*)", line)
-    if m:
-        rows.append((int(m.group(1), 16), m.group(2)))
+def listing(path):
+    """(address, instruction) of each line of an objdump listing."""
+    out = []
+    for line in open(path):
+        m = re.match(r"\s*([0-9a-f]+):\s+(?:[0-9a-f]{2} )+\s*(\S.*)", line)
+        if m:
+            out.append((int(m.group(1), 16), m.group(2)))
+    return out
+rows = listing(f"{work}/jit.s")
 samples = [l.split() for l in open(f"{work}/samples") if l.strip()]
 total = len(samples)
 ips = collections.Counter(int(s[0], 16) for s in samples if start <= int(s[0], 16) < end)
@@ -108,22 +113,15 @@ for k, v in by_slot.most_common(8):
 
 # Each mapping's samples and integer divisions.
 maps = [l.split() for l in open(f"{work}/jit_maps")]
-def listing(a):
-    out = []
-    for line in open(f"{work}/jit-{a}.s"):
-        m = re.match(r"\s*([0-9a-f]+):\s+(?:[0-9a-f]{2} )+\s*(\S.*)", line)
-        if m:
-            out.append((int(m.group(1), 16), m.group(2)))
-    return out
 all_ips = collections.Counter(int(s[0], 16) for s in samples)
 hot = []
 for a, b in maps:
     lo, hi = int(a, 16), int(b, 16)
     n = sum(v for k, v in all_ips.items() if lo <= k < hi)
     hot.append((n, a, hi - lo))
-print("generated functions by samples (share of all; integer divisions; share of its samples in them):")
+print("mappings of generated code by samples (share of all; integer divisions; share of its samples in them):")
 for n, a, size in sorted(hot, reverse=True)[:4]:
-    code = listing(a)
+    code = listing(f"{work}/jit-{a}.s")
     divs = [i for i, (_, t) in enumerate(code) if re.match(r"div\s", t)]
     at_divs = 0
     if divs:

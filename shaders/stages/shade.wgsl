@@ -98,7 +98,8 @@ override penumbra_HAS_CHECKER: bool = true;
 // with them, or with attributes or textures, the records have texel 3.
 override penumbra_HAS_PLANES: bool = true;
 override penumbra_HAS_SPHERES: bool = true;
-// render.wgsl's STAGE_WORDS and LANE_PIXELS (compile.rs: SHADE_SETTINGS).
+// render.wgsl's STAGE_WORDS and LANE_PIXELS (compile.rs:
+// shade_setting_values).
 override penumbra_STAGE_WORDS: bool = false;
 override penumbra_LANE_PIXELS: bool = false;
 

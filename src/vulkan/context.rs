@@ -470,9 +470,9 @@ impl Context {
     ///
     /// Why: lavapipe computes every lane's `local_invocation_index` (and
     /// `global_invocation_id`) with integer divisions by the workgroup's
-    /// size at the start of each SIMD group, a sixth of the shade stage's
-    /// time on the bunny, while its subgroup ids are a loop counter and a
-    /// constant vector. A CPU device (lavapipe) runs a workgroup as its
+    /// size at the start of each SIMD group (docs/stages.md measures what
+    /// they cost), while its subgroup ids are a loop counter and a constant
+    /// vector. A CPU device (lavapipe) runs a workgroup as its
     /// SIMD groups one after another, each a whole subgroup of the vector
     /// width (8 or 16 lanes, dividing 64). Vulkan 1.1 promises neither on a
     /// GPU, where the index costs nothing, so a GPU keeps the index.

@@ -56,8 +56,12 @@ fn stages(f: &Frame) -> Vec<&str> {
         .collect()
 }
 
-fn bits(f: &Frame) -> Vec<[u32; 4]> {
-    f.image.pixels.iter().map(|p| p.map(f32::to_bits)).collect()
+/// How many pixels of two frames differ in any bit.
+fn differing_pixels(a: &Frame, b: &Frame) -> usize {
+    let bits = |p: &[f32; 4]| p.map(f32::to_bits);
+    let (a, b) = (&a.image.pixels, &b.image.pixels);
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).filter(|(x, y)| bits(x) != bits(y)).count()
 }
 
 /// A scene of `scenes/` at `width`×`height`.
@@ -97,8 +101,7 @@ fn fused_shadow_rays_give_the_shadow_stages_image() {
         assert_eq!(fused.stats.shadow_rays, staged.stats.shadow_rays, "{file}");
         // Every case lights something, so the comparison covers shadow rays.
         assert!(fused.stats.shadow_rays > 0, "{file}: no shadow rays");
-        let (a, b) = (bits(&fused), bits(&staged));
-        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        let differ = differing_pixels(&fused, &staged);
         assert_eq!(
             differ, 0,
             "{file}: {differ} pixels differ without the shadow stage"
@@ -140,8 +143,7 @@ fn records_written_as_words_give_the_texel_stores_image() {
         let words = render_words(&mut r, &scene, cpu);
         let texels = render_words(&mut r, &scene, false);
         assert!(words.stats.shadow_rays > 0, "{what}: no shadow rays");
-        let (a, b) = (bits(&words), bits(&texels));
-        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        let differ = differing_pixels(&words, &texels);
         assert_eq!(
             differ, 0,
             "{what}: {differ} pixels differ with texel stores"
@@ -176,8 +178,7 @@ fn pixels_by_subgroup_and_lane_give_the_invocation_index_image() {
         let index = frame(false);
         assert!(lanes.stats.shadow_rays > 0, "{what}: no shadow rays");
         assert!(lanes.image.pixels.iter().any(|p| p[3] > 0.0), "{what}");
-        let (a, b) = (bits(&lanes), bits(&index));
-        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        let differ = differing_pixels(&lanes, &index);
         assert_eq!(
             differ, 0,
             "{what}: {differ} pixels differ from the index's placement"
@@ -227,7 +228,6 @@ fn without_checkers_the_shade_stage_finds_the_leaf_that_resolve_would() {
     // shades a pixel.
     let shade = stages(&a).iter().filter(|n| n.starts_with("shade")).count();
     assert!(shade >= 3, "{:?}", stages(&a));
-    let (x, y) = (bits(&a), bits(&b));
-    let differ = x.iter().zip(&y).filter(|(p, q)| p != q).count();
+    let differ = differing_pixels(&a, &b);
     assert_eq!(differ, 0, "{differ} pixels differ between the two paths");
 }
