@@ -38,6 +38,7 @@ pub mod panics;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod terminal;
 pub mod vector_width;
 pub mod vulkan;
 pub mod watch;

@@ -13,6 +13,7 @@ use penumbra::render::{
     Accel, KernelOptions, RenderError, Renderer, RendererOptions, Sampler, Sampling, ShaderSource,
     TriangleTest,
 };
+use penumbra::terminal;
 use penumbra::vector_width;
 use penumbra::vulkan::{Context, DeviceSelector};
 
@@ -361,6 +362,14 @@ struct WatchArgs {
     /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
+    /// Longest, in seconds, that one submission of work may run on the device
+    /// (a band of the image, 64 rows at the full size): a watchdog for shader
+    /// code that does not end. Past it, watch reports the error naming the
+    /// shader file, restarts itself (the device cannot stop the shader) and
+    /// renders the next save.
+    #[arg(long, value_name = "SECONDS", value_parser = |s: &str| parse_seconds(s).map(Seconds), allow_hyphen_values = true,
+          default_value_t = Seconds(penumbra::watch::DEFAULT_TIME_LIMIT))]
+    time_limit: Seconds,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -377,6 +386,16 @@ struct LimitArgs {
     #[arg(long, value_name = "MIB", default_value_t = loaders::guard::DEFAULT_MAX_SCENE_BYTES >> 20,
           value_parser = clap::value_parser!(u64).range(1..=1 << 30))]
     max_scene_memory: u64,
+}
+
+/// A duration given in seconds on the command line (shown so in `--help`).
+#[derive(Clone, Copy, Debug)]
+struct Seconds(std::time::Duration);
+
+impl std::fmt::Display for Seconds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0.as_secs_f64())
+    }
 }
 
 impl LimitArgs {
@@ -471,6 +490,13 @@ struct RenderArgs {
     /// the I-th), for a job array.
     #[arg(long, value_name = "I/K", requires = "batch")]
     batch_task: Option<penumbra::farm::split::Tile>,
+    /// Longest, in seconds, that one submission of work may run on the device
+    /// (one pass over a band of the image): a watchdog for shader code that
+    /// does not end. Past it, penumbra stops with an error naming the shader
+    /// file, and writes nothing.
+    #[arg(long, value_name = "SECONDS", value_parser = |s: &str| parse_seconds(s).map(Seconds), allow_hyphen_values = true,
+          default_value_t = Seconds(penumbra::vulkan::DEFAULT_TIME_LIMIT))]
+    time_limit: Seconds,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -512,6 +538,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         passes,
         batch,
         batch_task,
+        time_limit,
         limits,
     } = args;
     let out = out.unwrap_or_else(|| PathBuf::from("out.png"));
@@ -546,6 +573,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
                 validation: validate,
                 shaders,
                 kernel,
+                time_limit: Some(time_limit.0),
             };
             return render_batch(list, &out, batch_task, &renderer, &settings);
         }
@@ -596,6 +624,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             validation: validate,
             shaders,
             kernel,
+            time_limit: Some(time_limit.0),
         })?),
     };
     let mut load_options = limits.load_options(width, height);
@@ -606,7 +635,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let loaded = loaders::load_scene(&scene, &load_options)?;
     let load = t0.elapsed();
     for note in &loaded.notes {
-        eprintln!("note: {note}");
+        eprintln!("note: {}", terminal::diagnostic(note));
     }
     let mut scene_data = loaded.scene;
     if let Some(n) = area_samples {
@@ -944,18 +973,50 @@ fn watch(args: WatchArgs) -> anyhow::Result<()> {
         validation: args.validate,
         shaders,
         kernel: KernelOptions::default(),
+        time_limit: Some(args.time_limit.0),
     };
     opts.load = args.limits.load_options(args.width, args.height);
     opts.serve = args.serve;
     opts.preview_divisor = args.preview;
     opts.debounce = std::time::Duration::from_millis(args.debounce_ms);
+    opts.resume = penumbra::watch::restart::Resume::take_from_env();
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
-        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
-            .context("installing the Ctrl-C handler")?;
+        ctrlc::set_handler(move || {
+            stop.store(true, Ordering::Relaxed);
+            // The loop sees `stop` between reloads; a render in flight (up to
+            // --time-limit per submission, or one that never ends) would keep
+            // it longer. Every output is written atomically: end the process
+            // if it has not ended by itself well within a second.
+            std::thread::sleep(WATCH_STOP_GRACE);
+            exit_leaving_the_device(0);
+        })
+        .context("installing the Ctrl-C handler")?;
     }
-    penumbra::watch::run_printing(&opts, stop)
+    match penumbra::watch::run_printing(&opts, stop)? {
+        None => Ok(()),
+        Some(restart) => {
+            let e = restart.exec();
+            eprintln!("error: watch: cannot restart after the device hung: {e}");
+            exit_leaving_the_device(1)
+        }
+    }
+}
+
+/// How long Ctrl-C lets `watch` end by itself before ending it.
+const WATCH_STOP_GRACE: std::time::Duration = std::time::Duration::from_millis(600);
+
+/// Ends the process at once with `code`, without running exit handlers: after
+/// a time-out the device still runs the dispatch that never ends, and the
+/// driver's exit handlers (Mesa's thread pools) would wait for it for ever.
+/// Every output is written atomically, so nothing partial is left.
+fn exit_leaving_the_device(code: i32) -> ! {
+    use std::io::Write as _;
+    let _ = std::io::stdout().flush();
+    let _ = std::io::stderr().flush();
+    // SAFETY: _exit ends the process; it touches no Rust state.
+    unsafe { libc::_exit(code) }
 }
 
 fn main() -> ExitCode {
@@ -989,7 +1050,10 @@ fn main() -> ExitCode {
     match run {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", terminal::diagnostic(&format!("{e:#}")));
+            if penumbra::render::is_timeout(&e) {
+                exit_leaving_the_device(1);
+            }
             ExitCode::FAILURE
         }
         Err(_) => ExitCode::from(70),

@@ -16,6 +16,7 @@ pub mod tiles;
 mod trace;
 
 use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use bytemuck::Zeroable;
@@ -26,7 +27,7 @@ pub use crate::frame::{
 use crate::scene::{Features, Scene};
 use crate::vulkan::{
     BindingType, Buffer, BufferUsage, ComputePipeline, Context, ContextOptions, DeviceInfo,
-    DeviceSelector, Dispatch, Resource, TexelImage, VulkanError,
+    DeviceSelector, Dispatch, Resource, TexelImage, VulkanError, DRIVER_COMPILE_LIMIT,
 };
 use bands::ImageBands;
 pub use compile::{
@@ -78,6 +79,9 @@ pub struct RendererOptions {
     pub shaders: ShaderSource,
     /// BVH or brute force, and the ray/triangle test.
     pub kernel: KernelOptions,
+    /// The longest one submission may run ([`Renderer::set_time_limit`]);
+    /// `None`: [`crate::vulkan::DEFAULT_TIME_LIMIT`].
+    pub time_limit: Option<Duration>,
 }
 
 /// Why a frame could not be rendered.
@@ -99,6 +103,60 @@ pub enum RenderError {
         /// What limit it exceeds.
         message: String,
     },
+    /// Work on the device ran past its time limit: a shader that does not
+    /// end or far too much work in one submission, or (`compile`) a driver
+    /// compile that did not end. The device keeps running it
+    /// ([`VulkanError::TimedOut`]): only ending the process frees it.
+    #[error("{}", timed_out_message(what, *.compile, *.limit))]
+    TimedOut {
+        /// What was running: `scenes/shaders/loop.wgsl: the shade stage` for
+        /// user files, else the engine stages.
+        what: String,
+        /// The user shader files among them (empty: only engine stages).
+        user_files: Vec<PathBuf>,
+        /// Whether it was the driver's compile (the first dispatch of a
+        /// pipeline) rather than a frame's work.
+        compile: bool,
+        /// The limit.
+        limit: Duration,
+    },
+}
+
+fn timed_out_message(what: &str, compile: bool, limit: Duration) -> String {
+    let limit = crate::vulkan::describe_limit(limit);
+    match compile {
+        true => {
+            format!("{what}: the driver's compile ran past {limit}: is the shader far too large?")
+        }
+        false => format!(
+            "{what} ran past the time limit of {limit} (--time-limit): a loop that never ends?"
+        ),
+    }
+}
+
+impl RenderError {
+    /// Whether the device is left running work it could not finish in time
+    /// ([`RenderError::TimedOut`] or a [`VulkanError::TimedOut`] of a
+    /// transfer): the process must end to free it.
+    pub fn is_timeout(&self) -> bool {
+        matches!(
+            self,
+            RenderError::TimedOut { .. } | RenderError::Vulkan(VulkanError::TimedOut { .. })
+        )
+    }
+}
+
+/// Whether `e` (or an error it wraps) is a time-out of the device
+/// ([`RenderError::is_timeout`]).
+pub fn is_timeout(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<RenderError>()
+            .is_some_and(RenderError::is_timeout)
+            || matches!(
+                c.downcast_ref::<VulkanError>(),
+                Some(VulkanError::TimedOut { .. })
+            )
+    })
 }
 
 impl From<CompileError> for RenderError {
@@ -375,6 +433,66 @@ fn submit(
     refs: &[Resource],
     profile: bool,
     stage_times: &mut [Duration],
+    slots: &[SlotName],
+) -> Result<Duration, RenderError> {
+    submit_chain(ctx, pending, refs, profile, stage_times)
+        .map_err(|e| name_timed_out_stages(e, pending, slots))
+}
+
+/// What a slot of the stage times runs, as a time-out names it: an engine
+/// stage, or a shade program (its file's name, and its path if a user's).
+enum SlotName {
+    Engine(&'static str),
+    Program(String, Option<PathBuf>),
+}
+
+/// Names the stages of the submission `pending` that ran past the time
+/// limit: the user shader files among them (the only code in a frame whose
+/// running time the engine does not bound), else the engine stages.
+fn name_timed_out_stages(e: RenderError, pending: &[StagePush], slots: &[SlotName]) -> RenderError {
+    let RenderError::Vulkan(VulkanError::TimedOut { limit }) = e else {
+        return e;
+    };
+    let mut user_files: Vec<PathBuf> = Vec::new();
+    let mut stages: Vec<String> = Vec::new();
+    for (slot, ..) in pending {
+        let name = match slots.get(*slot) {
+            Some(SlotName::Program(label, user)) => {
+                if let Some(p) = user.as_ref().filter(|p| !user_files.contains(p)) {
+                    user_files.push(p.clone());
+                }
+                format!("the shade stage of {label}")
+            }
+            Some(SlotName::Engine(name)) => format!("the {name} stage"),
+            None => continue,
+        };
+        if !stages.contains(&name) {
+            stages.push(name);
+        }
+    }
+    let what = match (user_files.is_empty(), stages.is_empty()) {
+        (false, _) => {
+            let files: Vec<String> = user_files.iter().map(|p| p.display().to_string()).collect();
+            format!("{}: the shade stage", files.join(", "))
+        }
+        (true, false) => stages.join(" or "),
+        (true, true) => "a submission".to_string(),
+    };
+    RenderError::TimedOut {
+        what,
+        user_files,
+        compile: false,
+        limit,
+    }
+}
+
+/// [`submit`] before its time-out is named.
+fn submit_chain(
+    ctx: &Context,
+    pending: &mut Vec<StagePush>,
+    refs: &[Resource],
+    profile: bool,
+    stage_times: &mut [Duration],
 ) -> Result<Duration, RenderError> {
     let chain: Vec<Dispatch> = pending
         .iter()
@@ -413,6 +531,9 @@ impl Renderer {
             device: opts.device.clone(),
             validation: opts.validation,
         })?;
+        if let Some(limit) = opts.time_limit {
+            context.set_time_limit(limit);
+        }
         Ok(Renderer {
             stage_pipelines: HashMap::new(),
             shade_pipelines: HashMap::new(),
@@ -431,6 +552,24 @@ impl Renderer {
             kernel: opts.kernel,
             context,
         })
+    }
+
+    /// Bounds every wait on the device ([`Context::set_time_limit`]): a
+    /// frame whose submission runs longer fails with
+    /// [`RenderError::TimedOut`], naming its shader files.
+    pub fn set_time_limit(&self, limit: Duration) {
+        self.context.set_time_limit(limit)
+    }
+
+    /// The longest one submission has run so far ([`Context::longest_wait`]).
+    pub fn longest_wait(&self) -> Duration {
+        self.context.longest_wait()
+    }
+
+    /// Whether a wait ran past the time limit: the device still runs that
+    /// work, and every later frame fails ([`RenderError::is_timeout`]).
+    pub fn is_hung(&self) -> bool {
+        self.context.is_hung()
     }
 
     /// The bound on one tile's stage memory (hit records, colour sums and
@@ -568,10 +707,16 @@ impl Renderer {
     /// with an empty dispatch (lavapipe compiles at the first dispatch), so
     /// that render phases measure rendering only. Returns it and the times
     /// of pipeline creation and of the driver's compile.
+    ///
+    /// That first dispatch waits for the driver at most
+    /// [`DRIVER_COMPILE_LIMIT`] (or the time limit if longer); past it, the
+    /// error names `what` (and `user_file`, the user's shader file, if any).
     fn build_pipeline(
         &self,
         spirv: &[u32],
         entry: &str,
+        what: &str,
+        user_file: Option<&Path>,
     ) -> Result<(ComputePipeline, Duration, Duration), RenderError> {
         let t1 = Instant::now();
         let types = stages::binding_types();
@@ -602,8 +747,22 @@ impl Renderer {
             flags: FLAG_WARM_UP,
             ..Zeroable::zeroed()
         };
-        self.context
-            .dispatch(&pipeline, &refs, bytemuck::bytes_of(&push), [1, 1, 1])?;
+        let limit = self.context.time_limit().max(DRIVER_COMPILE_LIMIT);
+        let push = bytemuck::bytes_of(&push);
+        match self
+            .context
+            .dispatch_within(&pipeline, &refs, push, [1, 1, 1], limit)
+        {
+            Err(VulkanError::TimedOut { limit }) => {
+                return Err(RenderError::TimedOut {
+                    what: what.to_string(),
+                    user_files: user_file.map(Path::to_path_buf).into_iter().collect(),
+                    compile: true,
+                    limit,
+                })
+            }
+            r => r?,
+        };
         Ok((pipeline, t2 - t1, t2.elapsed()))
     }
 
@@ -631,7 +790,9 @@ impl Renderer {
         }
         let spirv = assembled.compile_entry(&kernel, stage.entry_point())?;
         let naga = t0.elapsed();
-        let (pipeline, creation, driver) = self.build_pipeline(&spirv, stage.entry_point())?;
+        let what = format!("the {} stage", stage.name());
+        let (pipeline, creation, driver) =
+            self.build_pipeline(&spirv, stage.entry_point(), &what, None)?;
         if stage != Stage::Trace {
             self.traversal_generation += 1;
         }
@@ -684,7 +845,13 @@ impl Renderer {
             .assembled
             .compile_entry(&key, shade::SHADE_ENTRY_POINT)?;
         let naga = t0.elapsed();
-        let (pipeline, creation, driver) = self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT)?;
+        let what = format!("{}: the shade stage", program.file.label_in(&self.shaders));
+        let user_file = match &program.file {
+            ProgramFile::User(p) => Some(p.as_path()),
+            ProgramFile::Builtin(_) => None,
+        };
+        let (pipeline, creation, driver) =
+            self.build_pipeline(&spirv, shade::SHADE_ENTRY_POINT, &what, user_file)?;
         self.shade_pipelines.insert(
             cache_key,
             Cached {
@@ -1294,6 +1461,17 @@ impl Renderer {
         let engine_stages = Stage::frame(&settings);
         let engine = engine_stages.len();
         let mut stage_times = vec![Duration::ZERO; engine + programs.len()];
+        let slots: Vec<SlotName> = engine_stages
+            .iter()
+            .map(|s| SlotName::Engine(s.name()))
+            .chain(scene.materials.programs.iter().map(|p| {
+                let user = match &p.file {
+                    ProgramFile::User(path) => Some(path.clone()),
+                    ProgramFile::Builtin(_) => None,
+                };
+                SlotName::Program(p.file.label_in(&self.shaders), user)
+            }))
+            .collect();
         while first_pass + passes < end_pass {
             let base = PushConstants {
                 size: [width, height],
@@ -1309,7 +1487,14 @@ impl Renderer {
             let mut pending_band = 0;
             let profile = self.profile_stages;
             let mut flush = |pending: &mut Vec<StagePush>, band: usize| {
-                submit(ctx, pending, &band_refs[band], profile, &mut stage_times)
+                submit(
+                    ctx,
+                    pending,
+                    &band_refs[band],
+                    profile,
+                    &mut stage_times,
+                    &slots,
+                )
             };
             for &(origin, size) in &tiles {
                 let band = bands.band_of(origin[1]);

@@ -123,6 +123,10 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if self.shared.is_hung() {
+            // Work that may use it still runs on the device: leak it.
+            return;
+        }
         // SAFETY: every submit waits for its fence, so the buffer is not in use; freeing the
         // memory also unmaps it. Null handles (failed creation) are ignored by Vulkan.
         unsafe {

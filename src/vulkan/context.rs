@@ -5,6 +5,7 @@ use ash::vk;
 use std::ffi::{c_void, CStr};
 use std::str::FromStr;
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -314,15 +315,40 @@ struct PhysicalDevice {
 /// The logical device, shared by the context, buffers and pipelines; destroyed last.
 pub(crate) struct DeviceShared {
     pub(crate) device: ash::Device,
-    instance: InstanceHolder,
+    /// Dropped by hand after the device, unless the device hung.
+    instance: std::mem::ManuallyDrop<InstanceHolder>,
+    /// Set when a wait ran past the time limit ([`Context::time_limit`]): the
+    /// queue is still running work that cannot be cancelled, so nothing it
+    /// may use is destroyed any more (every `Drop` leaks instead), and every
+    /// later submit fails at once. Only ending the process frees the device.
+    hung: std::sync::atomic::AtomicBool,
+}
+
+impl DeviceShared {
+    /// Whether a wait on this device ran past its time limit.
+    pub(crate) fn is_hung(&self) -> bool {
+        self.hung.load(std::sync::atomic::Ordering::Acquire)
+    }
+
+    /// Marks the device as running work that will not be waited for.
+    pub(crate) fn mark_hung(&self) {
+        self.hung.store(true, std::sync::atomic::Ordering::Release)
+    }
 }
 
 impl Drop for DeviceShared {
     fn drop(&mut self) {
-        // SAFETY: every object created from the device holds an Arc to us, so all are gone.
+        if self.is_hung() {
+            // The queue still runs: destroying the device, the instance or unloading the
+            // driver under it is undefined, and waiting for it would never end. Leak them.
+            return;
+        }
+        // SAFETY: every object created from the device holds an Arc to us, so all are gone;
+        // the instance goes after its device, and is not used after this.
         unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_device(None);
+            std::mem::ManuallyDrop::drop(&mut self.instance);
         }
     }
 }
@@ -354,6 +380,10 @@ pub struct Context {
     limits: DeviceLimits,
     /// The staging buffers kept between transfers: upload, readback (`Context::staging`).
     pub(crate) staging: Mutex<[Option<super::Buffer>; 2]>,
+    /// The longest one wait on the device may take, in nanoseconds ([`Context::set_time_limit`]).
+    time_limit: std::sync::atomic::AtomicU64,
+    /// The longest wait so far, in nanoseconds ([`Context::longest_wait`]).
+    longest_wait: std::sync::atomic::AtomicU64,
 }
 
 fn physical_is_cpu(info: &DeviceInfo) -> bool {
@@ -399,7 +429,11 @@ impl Context {
                 .create_device(physical.handle, &device_info, None)
         }
         .map_err(vk_err("vkCreateDevice"))?;
-        let shared = Arc::new(DeviceShared { device, instance });
+        let shared = Arc::new(DeviceShared {
+            device,
+            instance: std::mem::ManuallyDrop::new(instance),
+            hung: std::sync::atomic::AtomicBool::new(false),
+        });
         let device = &shared.device;
         // SAFETY: family/index were requested at device creation.
         let queue = unsafe { device.get_device_queue(physical.queue_family, 0) };
@@ -447,6 +481,8 @@ impl Context {
             info: physical.info,
             limits: physical.limits,
             staging: Mutex::new([None, None]),
+            time_limit: std::sync::atomic::AtomicU64::new(DEFAULT_TIME_LIMIT.as_nanos() as u64),
+            longest_wait: std::sync::atomic::AtomicU64::new(0),
             shared,
         };
         // Only on CPU devices (lavapipe), where a texel store costs several
@@ -510,8 +546,57 @@ impl Context {
     }
 }
 
+/// The longest that one submission may run on the device unless set otherwise
+/// ([`Context::set_time_limit`]): a watchdog for shader code that never ends. Far above what
+/// any honest submission takes (one pass over a band of the image, at most 128 MiB of pixels;
+/// docs/watchdog.md lists the longest measured on the scenes in scenes/).
+pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(60);
+
+/// The longest the driver's compile of one pipeline may take (lavapipe compiles at the first
+/// dispatch; penumbra's stages take 0.5–2.8 s cold): the first dispatch of a pipeline waits
+/// this long, or the time limit if that is longer.
+pub const DRIVER_COMPILE_LIMIT: Duration = Duration::from_secs(60);
+
+impl Context {
+    /// Bounds every later wait on the device: a submission that has not finished after
+    /// `limit` fails with [`VulkanError::TimedOut`] and leaves the device hung (see there).
+    pub fn set_time_limit(&self, limit: Duration) {
+        let nanos = u64::try_from(limit.as_nanos()).unwrap_or(u64::MAX);
+        self.time_limit
+            .store(nanos, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// The bound on one wait ([`Context::set_time_limit`]; [`DEFAULT_TIME_LIMIT`] unless set).
+    pub fn time_limit(&self) -> Duration {
+        Duration::from_nanos(self.time_limit.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Whether a wait ran past the time limit: the device still runs that work, and every
+    /// later submit fails.
+    pub fn is_hung(&self) -> bool {
+        self.shared.is_hung()
+    }
+
+    /// The longest that one submission has run so far, from submit to its fence (the driver's
+    /// compile at a pipeline's first dispatch included): how far the work stays from
+    /// [`Context::time_limit`] (tools/watchdog_margin.rs).
+    pub fn longest_wait(&self) -> Duration {
+        Duration::from_nanos(self.longest_wait.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Records one wait for [`Context::longest_wait`].
+    pub(crate) fn record_wait(&self, wait: Duration) {
+        let nanos = u64::try_from(wait.as_nanos()).unwrap_or(u64::MAX);
+        self.longest_wait
+            .fetch_max(nanos, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
 impl Drop for Context {
     fn drop(&mut self) {
+        if self.shared.is_hung() {
+            return;
+        }
         let submitter = self.submitter.get_mut().unwrap_or_else(|e| e.into_inner());
         // SAFETY: waiting for idle guarantees the command buffer is no longer pending.
         unsafe {

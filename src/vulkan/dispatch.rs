@@ -119,6 +119,35 @@ impl Context {
     /// appears more than once must bind the same resources each time (its one descriptor set is
     /// written once). Returns the wall time from submit to fence signalled.
     pub fn dispatch_chain(&self, chain: &[Dispatch]) -> Result<Duration, VulkanError> {
+        self.dispatch_chain_within(chain, self.time_limit())
+    }
+
+    /// [`Context::dispatch`] with its own time limit instead of [`Context::time_limit`]: for
+    /// the first dispatch of a pipeline, which waits for the driver's compile (lavapipe
+    /// compiles at the first dispatch).
+    pub fn dispatch_within(
+        &self,
+        pipeline: &ComputePipeline,
+        resources: &[Resource],
+        push_constants: &[u8],
+        groups: [u32; 3],
+        limit: Duration,
+    ) -> Result<Duration, VulkanError> {
+        let chain = [Dispatch {
+            pipeline,
+            resources,
+            push_constants,
+            groups,
+        }];
+        self.dispatch_chain_within(&chain, limit)
+    }
+
+    /// [`Context::dispatch_chain`] waiting at most `limit`.
+    fn dispatch_chain_within(
+        &self,
+        chain: &[Dispatch],
+        limit: Duration,
+    ) -> Result<Duration, VulkanError> {
         let mut written: Vec<(vk::DescriptorSet, Vec<u64>)> = Vec::new();
         for d in chain {
             self.check_dispatch(d.pipeline, d.resources, d.push_constants, d.groups)?;
@@ -185,7 +214,7 @@ impl Context {
             .collect();
         // SAFETY: everything was checked above; the sets are updated under the submit lock, while
         // no earlier dispatch can still be using them (each submission is waited for).
-        self.submit(|device, cmd| unsafe {
+        self.submit_within(limit, |device, cmd| unsafe {
             if !writes.is_empty() {
                 device.update_descriptor_sets(&writes, &[]);
             }
@@ -288,7 +317,20 @@ impl Context {
         &self,
         record: impl FnOnce(&ash::Device, vk::CommandBuffer),
     ) -> Result<Duration, VulkanError> {
+        self.submit_within(self.time_limit(), record)
+    }
+
+    /// [`Context::submit`], waiting at most `limit`: past it, the work keeps running (it
+    /// cannot be cancelled), the device is marked hung and [`VulkanError::TimedOut`] returned.
+    fn submit_within(
+        &self,
+        limit: Duration,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<Duration, VulkanError> {
         let submitter = self.submitter.lock().unwrap_or_else(|e| e.into_inner());
+        if self.shared.is_hung() {
+            return Err(VulkanError::TimedOut { limit });
+        }
         let device = &self.shared.device;
         let cmd = submitter.command_buffer;
         let begin = vk::CommandBufferBeginInfo::default()
@@ -316,12 +358,22 @@ impl Context {
                 .queue_submit(submitter.queue, &submit, fence)
                 .map_err(vk_err("vkQueueSubmit"))
                 .and_then(|()| {
-                    device
-                        .wait_for_fences(&[fence], true, u64::MAX)
-                        .map_err(vk_err("vkWaitForFences"))
+                    let nanos = u64::try_from(limit.as_nanos()).unwrap_or(u64::MAX);
+                    match device.wait_for_fences(&[fence], true, nanos) {
+                        // The work cannot be cancelled: it keeps the queue, the command
+                        // buffer and the fence; nothing it may use is freed from now on.
+                        Err(vk::Result::TIMEOUT) => {
+                            self.shared.mark_hung();
+                            Err(VulkanError::TimedOut { limit })
+                        }
+                        r => r.map_err(vk_err("vkWaitForFences")),
+                    }
                 });
             let elapsed = start.elapsed();
-            device.destroy_fence(fence, None);
+            self.record_wait(elapsed);
+            if !self.shared.is_hung() {
+                device.destroy_fence(fence, None);
+            }
             result.map(|()| elapsed)
         }
     }

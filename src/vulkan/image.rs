@@ -63,6 +63,10 @@ impl TexelImage {
 
 impl Drop for TexelImage {
     fn drop(&mut self) {
+        if self.shared.is_hung() {
+            // Work that may use it still runs on the device: leak it.
+            return;
+        }
         // SAFETY: every submit waits for its fence, so the image is not in use. Null handles
         // (failed creation) are ignored by Vulkan.
         // The aliasing buffer goes before the memory it is bound to.

@@ -12,7 +12,10 @@ mod image;
 mod pipeline;
 
 pub use buffer::{Buffer, BufferUsage, MAX_KEPT_STAGING};
-pub use context::{Context, ContextOptions, DeviceInfo, DeviceLimits, DeviceSelector};
+pub use context::{
+    Context, ContextOptions, DeviceInfo, DeviceLimits, DeviceSelector, DEFAULT_TIME_LIMIT,
+    DRIVER_COMPILE_LIMIT,
+};
 pub use dispatch::{Dispatch, Resource};
 pub use image::{TexelImage, TEXEL_BYTES, TEXEL_ROW};
 pub use pipeline::{BindingType, ComputePipeline};
@@ -61,6 +64,19 @@ pub enum VulkanError {
         /// The first of them.
         first: String,
     },
+    /// Work on the device ran past the time limit ([`Context::set_time_limit`]). A running
+    /// dispatch cannot be cancelled: the device is left running it, every later submit fails
+    /// with this error, and only ending the process frees it.
+    #[error("the device did not finish within the time limit of {}", crate::vulkan::describe_limit(*.limit))]
+    TimedOut {
+        /// The limit that was exceeded.
+        limit: std::time::Duration,
+    },
+}
+
+/// A time limit as messages give it: `10 s`, `0.5 s`.
+pub fn describe_limit(limit: std::time::Duration) -> String {
+    format!("{} s", limit.as_secs_f64())
 }
 
 /// A Vulkan result code as the rest of penumbra sees it: the number, its

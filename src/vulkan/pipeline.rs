@@ -50,6 +50,10 @@ pub struct ComputePipeline {
 
 impl Drop for ComputePipeline {
     fn drop(&mut self) {
+        if self.shared.is_hung() {
+            // Work that may use it still runs on the device: leak it.
+            return;
+        }
         // SAFETY: dispatches wait for completion, so nothing is in flight; null handles are no-ops.
         unsafe {
             let device = &self.shared.device;

@@ -23,6 +23,7 @@
 //! always completes.
 
 pub mod files;
+pub mod restart;
 pub mod server;
 pub mod stage;
 
@@ -41,6 +42,11 @@ use crate::render::compile::SHADER_FILES;
 use crate::render::{Renderer, RendererOptions, ShaderSource};
 use files::{normalise, FileWatcher, WatchSet};
 use stage::{Changes, CompileTimes, Session, StageFrame};
+
+/// `watch`'s default bound on one submission of work to the device: its
+/// renders go in bands of rows (64 at the full size), each far below it
+/// (docs/watchdog.md), and a shader that never ends is reported this soon.
+pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(10);
 
 /// How to run the loop.
 #[derive(Clone, Debug)]
@@ -62,6 +68,10 @@ pub struct WatchOptions {
     /// every file was closed after its write or renamed into place: the
     /// reload then starts [`files::SETTLE`] after the last of them.
     pub debounce: Duration,
+    /// What a restart after a hung device left ([`restart`]): where the
+    /// reload numbers go on, the page's address, the files not to render
+    /// again until they change.
+    pub resume: restart::Resume,
 }
 
 impl WatchOptions {
@@ -71,11 +81,15 @@ impl WatchOptions {
         WatchOptions {
             scene: scene.into(),
             output: output.into(),
-            renderer: RendererOptions::default(),
+            renderer: RendererOptions {
+                time_limit: Some(DEFAULT_TIME_LIMIT),
+                ..RendererOptions::default()
+            },
             load: LoadOptions::default(),
             serve: None,
             preview_divisor: 4,
             debounce: Duration::from_millis(30),
+            resume: restart::Resume::default(),
         }
     }
 }
@@ -153,6 +167,11 @@ pub enum Event {
     },
     /// A reload finished (or failed).
     Reload(Reload),
+    /// The device is hung (a shader ran past the time limit and cannot be
+    /// stopped): the loop has ended, and only a new process can go on
+    /// ([`restart::Restart::exec`]). Sent after that reload's
+    /// [`Event::Reload`], which reported the error.
+    Restart(restart::Restart),
 }
 
 impl Event {
@@ -167,11 +186,14 @@ impl Event {
             Event::Reload(r) => {
                 let mut err = std::io::stderr().lock();
                 for e in &r.errors {
-                    let _ = writeln!(err, "error: {e}");
+                    let _ = writeln!(err, "error: {}", crate::terminal::diagnostic(e));
                 }
                 drop(err);
                 println!("{}", r.line);
             }
+            Event::Restart(_) => println!(
+                "restarting: the device still runs the shader that did not end, and only a new process frees it; the next save renders"
+            ),
         }
         let _ = std::io::stdout().flush();
     }
@@ -199,6 +221,10 @@ pub fn run(
     });
     while let Some(b) = batch {
         watch.reload(b);
+        if let Some(restart) = watch.hung() {
+            let _ = watch.events.send(Event::Restart(restart));
+            return Ok(());
+        }
         batch = watch.watcher.next_batch(&stop);
     }
     Ok(())
@@ -224,6 +250,16 @@ struct Watch {
     number: u64,
     /// Whether [`Event::Watching`] was sent.
     announced: bool,
+    /// Whether the scene was loaded once (until then every reload applies
+    /// everything).
+    loaded: bool,
+    /// Files that hung the device before a restart, not rendered again
+    /// until one of them changes.
+    quarantine: Option<restart::Quarantine>,
+    /// The last reload's errors (for [`Watch::hung`]).
+    last_errors: Vec<String>,
+    /// The live page's bound address.
+    serving: Option<SocketAddr>,
     /// The live page's server, kept running as long as the loop.
     _server: Option<server::Server>,
 }
@@ -256,10 +292,18 @@ impl Watch {
                 .collect(),
             None => Vec::new(),
         };
-        let watcher = FileWatcher::new(watch_set(&session, &shader_files), opts.debounce)?;
+        let quarantine = opts.resume.quarantine.clone();
+        let mut set = watch_set(&session, &shader_files);
+        if let Some(q) = &quarantine {
+            // The scene is not loaded before a change: watch what hung.
+            set.scene.extend(q.files.iter().cloned());
+        }
+        let watcher = FileWatcher::new(set, opts.debounce)?;
 
         let live = Arc::new(server::Live::default());
-        let server = match opts.serve {
+        // After a restart, the address the page had (the port may have been 0).
+        let serve = opts.serve.map(|a| opts.resume.serve.unwrap_or(a));
+        let server = match serve {
             Some(addr) => {
                 let s = server::Server::start(addr, live.clone())?;
                 let _ = events.send(Event::Serving {
@@ -269,6 +313,13 @@ impl Watch {
             }
             None => None,
         };
+        if quarantine.is_some() && format == Format::Png {
+            // The last good image, kept on disk across the restart.
+            if let Ok(png) = std::fs::read(&opts.output) {
+                live.set_image(png);
+            }
+        }
+        let serving = server.as_ref().map(|s| s.addr);
         Ok(Watch {
             session,
             watcher,
@@ -285,10 +336,53 @@ impl Watch {
                 vec![1]
             },
             events,
-            number: 0,
+            number: opts.resume.next_reload,
             announced: false,
+            loaded: false,
+            quarantine,
+            last_errors: Vec::new(),
+            serving,
             _server: server,
         })
+    }
+
+    /// After a reload: whether the device hung, and if so what a new
+    /// process needs to go on ([`restart`]).
+    fn hung(&self) -> Option<restart::Restart> {
+        if !self.session.is_hung() {
+            return None;
+        }
+        let files = hashed_files(&self.session, &self.shader_files);
+        let error = self
+            .last_errors
+            .iter()
+            .find(|e| e.contains("--time-limit") || e.contains("time limit"))
+            .or(self.last_errors.first())
+            .cloned()
+            .unwrap_or_else(|| "the device ran past the time limit".into());
+        Some(restart::Restart {
+            quarantine: restart::Quarantine {
+                snapshot: restart::snapshot(&files),
+                files,
+                error,
+            },
+            next_reload: self.number,
+            serve: self.serving,
+        })
+    }
+
+    /// Whether the files are still those that hung the device before the
+    /// restart (then nothing is applied or rendered).
+    fn quarantined(&mut self) -> Option<String> {
+        let q = self.quarantine.as_ref()?;
+        if restart::snapshot(&q.files) == q.snapshot {
+            return Some(format!(
+                "{} (at the last save; not rendered again until a file changes)",
+                q.error
+            ));
+        }
+        self.quarantine = None;
+        None
     }
 
     /// One reload: applies the batch's changes (everything for the first
@@ -297,6 +391,12 @@ impl Watch {
     /// the [`Event::Reload`].
     fn reload(&mut self, b: files::Batch) {
         let number = self.number;
+        if let Some(error) = self.quarantined() {
+            self.report_quarantined(b, error);
+            return;
+        }
+        let first = !self.loaded;
+        self.loaded = true;
         // The last good scene's texture files (watched with the scene's):
         // an edit of one alone replaces that texture.
         let texture_files: BTreeSet<PathBuf> = self
@@ -305,7 +405,7 @@ impl Watch {
             .iter()
             .map(|p| normalise(p))
             .collect();
-        let changes = if number == 0 {
+        let changes = if first {
             Changes {
                 shaders: true,
                 scene: true,
@@ -320,7 +420,7 @@ impl Watch {
                     .any(|p| set.scene.contains(p) && !texture_files.contains(p)),
             }
         };
-        let textures: Vec<PathBuf> = if number == 0 {
+        let textures: Vec<PathBuf> = if first {
             Vec::new()
         } else {
             b.paths
@@ -385,6 +485,40 @@ impl Watch {
                 .collect::<Vec<_>>();
             let current = (!current.is_empty()).then(|| current.join("\n\n"));
             live.set_status(current, reload.line.clone());
+        }
+        self.last_errors = reload.errors.clone();
+        let _ = self.events.send(Event::Reload(reload));
+        self.number += 1;
+    }
+
+    /// A reload while the files are those that hung the device: reports
+    /// the error again and keeps the last good image.
+    fn report_quarantined(&mut self, b: files::Batch, error: String) {
+        let mut reload = Reload {
+            number: self.number,
+            changed: b.paths.into_iter().collect(),
+            changes: Changes::default(),
+            compile: None,
+            upload: None,
+            textures: Vec::new(),
+            texture_replace: None,
+            stages: Vec::new(),
+            cancelled: false,
+            errors: vec![error.clone()],
+            line: String::new(),
+        };
+        reload.line = reload.summary(false, &self.divisors, |p| {
+            describe(self.shader_dir.as_deref(), p)
+        });
+        if let Some(live) = &self.out.live {
+            live.set_status(Some(error), reload.line.clone());
+        }
+        if !self.announced {
+            let set = self.watcher.set();
+            let _ = self.events.send(Event::Watching {
+                files: set.scene.iter().chain(&set.shaders).cloned().collect(),
+            });
+            self.announced = true;
         }
         let _ = self.events.send(Event::Reload(reload));
         self.number += 1;
@@ -452,6 +586,9 @@ impl Reload {
     ) -> String {
         let what = if self.number == 0 {
             "start".to_string()
+        } else if self.changed.is_empty() {
+            // The first reload of a process that restarted after a hang.
+            "restart".to_string()
         } else {
             let mut kinds = Vec::new();
             if self.changes.shaders {
@@ -595,19 +732,47 @@ impl Output {
     }
 }
 
+/// The files whose contents a [`restart::Quarantine`] holds: the scene's
+/// files and user shaders, and the engine's shader files when they are
+/// watched (`shader_files`); not the textures (a texture does not run).
+fn hashed_files(session: &Session, shader_files: &[PathBuf]) -> Vec<PathBuf> {
+    let textures: BTreeSet<PathBuf> = session
+        .texture_files()
+        .iter()
+        .map(|p| normalise(p))
+        .collect();
+    session
+        .scene_files()
+        .iter()
+        .chain(session.user_shader_files())
+        .map(|p| normalise(p))
+        .chain(shader_files.iter().cloned())
+        .filter(|p| !textures.contains(p))
+        .collect()
+}
+
 /// Runs the loop until `stop` is set, printing as the command line does.
-pub fn run_printing(opts: &WatchOptions, stop: Arc<AtomicBool>) -> anyhow::Result<()> {
+/// Returns the [`restart::Restart`] to carry out when the device hung.
+pub fn run_printing(
+    opts: &WatchOptions,
+    stop: Arc<AtomicBool>,
+) -> anyhow::Result<Option<restart::Restart>> {
     let (tx, rx) = std::sync::mpsc::channel();
     let opts = opts.clone();
     let stop2 = stop.clone();
     let looped = std::thread::Builder::new()
         .name("watch".into())
         .spawn(move || run(&opts, stop2, tx))?;
+    let mut restart = None;
     for ev in rx {
         ev.print();
+        if let Event::Restart(r) = ev {
+            restart = Some(r);
+        }
     }
     stop.store(true, Ordering::Relaxed);
     looped
         .join()
-        .map_err(|_| anyhow::anyhow!("the watch loop panicked"))?
+        .map_err(|_| anyhow::anyhow!("the watch loop panicked"))??;
+    Ok(restart)
 }

@@ -147,6 +147,12 @@ impl Session {
         }
     }
 
+    /// Whether the device is hung: a shader ran past the time limit and
+    /// cannot be stopped ([`crate::render::Renderer::is_hung`]).
+    pub fn is_hung(&self) -> bool {
+        self.renderer.is_hung()
+    }
+
     /// The files the last good scene read (the scene file alone before the
     /// first good load).
     pub fn scene_files(&self) -> &[PathBuf] {

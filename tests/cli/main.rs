@@ -20,3 +20,4 @@ mod setup_script;
 mod vector_width;
 mod watch;
 mod watch_browser;
+mod watchdog;

@@ -1,0 +1,179 @@
+//! The watchdog for shader code (`--time-limit`): a shader that never ends,
+//! through the binary. `render` ends with one `error:` line naming the
+//! shader file and writes nothing; `watch` reports it, keeps the last good
+//! image, restarts itself (the device cannot stop the shader), renders the
+//! next good save, and Ctrl-C ends it within a second in every state.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use crate::watch_support::*;
+
+/// `shade()` of `src` with a loop in front that never ends: float addition
+/// stops at 2^24 and its exit depends on a parameter, so no compiler can
+/// prove that it ends or that it does not, and its result is used (NIR
+/// removes a loop whose results nothing uses).
+fn never_ending(src: &str, param: &str) -> String {
+    let at = src.find("fn shade(").expect("a shade function");
+    let body = at + src[at..].find('{').expect("its body") + 1;
+    format!(
+        "{}\n    var spin = 0.0;\n    loop {{\n        if (spin > abs(p.{param}) * 1e30 + 1e30) {{ break; }}\n        spin += 1.0;\n    }}\n    if (spin == 12345.0) {{ return vec3<f32>(spin); }}\n{}",
+        &src[..body],
+        &src[body..]
+    )
+}
+
+/// Sends SIGINT to `child` and returns how long it took to exit, panicking
+/// after 3 s.
+fn interrupt(child: &mut std::process::Child) -> Duration {
+    let t = Instant::now();
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            assert!(status.code().is_some(), "killed by a signal: {status:?}");
+            return t.elapsed();
+        }
+        assert!(t.elapsed() < Duration::from_secs(3), "watch ignored SIGINT");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn render_stops_a_shader_that_never_ends_and_names_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let shader = dir.path().join("spin.wgsl");
+    let normals = include_str!("../../scenes/shaders/normals.wgsl");
+    std::fs::write(&shader, never_ending(normals, "weight")).unwrap();
+    let scene = r#"{
+      "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 32, "height": 24},
+      "shaders": {"spin": {"type": "wgsl", "file": "spin.wgsl", "params": {"weight": 1}}},
+      "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "spin"}],
+      "lights": [{"type": "point", "position": [2, 2, 3], "intensity": 10}]
+    }"#;
+    std::fs::write(dir.path().join("scene.json"), scene).unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let t = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("render")
+        .arg(dir.path().join("scene.json"))
+        .arg("-o")
+        .arg(out_dir.join("out.png"))
+        .args(["--time-limit", "1"])
+        .output()
+        .unwrap();
+    let took = t.elapsed();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(
+        stderr.contains("spin.wgsl: the shade stage ran past the time limit of 1 s (--time-limit)"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty());
+    assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "no output");
+    // Not a timing test: a bound far above the limit, to catch a wait
+    // without a deadline (the device never ends this shader).
+    assert!(took < Duration::from_secs(60), "{took:?}");
+}
+
+#[test]
+fn time_limit_values_are_checked() {
+    for bad in ["0", "-1", "abc", "nan", "1e9"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args(["render", "scene.json", "--time-limit", bad])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains("--time-limit"),
+            "{stderr}"
+        );
+    }
+}
+
+#[test]
+fn watch_survives_a_shader_that_never_ends() {
+    let fx = Fixture::new();
+    let mut p = Child::start(&fx, &["--debounce-ms", "40", "--time-limit", "2"]);
+    let pid = p.child.id();
+    p.wait_line("the first render", false, |l| {
+        l.starts_with("reload 0: start")
+    });
+    let good = fx.output();
+
+    std::fs::write(
+        fx.shader_path(),
+        never_ending(&fx.shader_original, "shininess"),
+    )
+    .unwrap();
+    let phong = fx.shaders.canonicalize().unwrap().join(SHADER);
+    let error = p.wait_line("the time-out", true, |l| {
+        l.contains("ran past the time limit of 2 s")
+    });
+    assert!(error.starts_with("error: "), "{error}");
+    assert!(
+        error.contains(&phong.display().to_string()),
+        "names the file: {error}"
+    );
+    let line = p.wait_line("reload 1", false, |l| l.starts_with("reload 1:"));
+    assert!(line.contains("ERROR: kept the last good image"), "{line}");
+    p.wait_line("the restart", false, |l| l.starts_with("restarting: "));
+    // The new process does not run the same files again; same pid.
+    let line = p.wait_line("reload 2", false, |l| l.starts_with("reload 2: restart"));
+    assert!(line.contains("ERROR: kept the last good image"), "{line}");
+    assert_eq!(p.child.id(), pid);
+    assert_eq!(fx.output(), good, "the last good image is kept");
+
+    // The next good save renders.
+    save_by_rename(
+        &fx.shader_path(),
+        &fx.shader_scaled("vec3<f32>(1.0, 0.0, 0.0)"),
+    );
+    let line = p.wait_line("recovery", false, |l| l.starts_with("reload 3:"));
+    assert!(
+        line.contains("full 64x48") && !line.contains("ERROR"),
+        "{line}"
+    );
+    let c = fx.centre();
+    assert!(c[0] > 200 && c[1] == 0, "{c:?}");
+
+    let took = interrupt(&mut p.child);
+    assert!(took < Duration::from_secs(1), "SIGINT took {took:?}");
+}
+
+#[test]
+fn ctrl_c_ends_watch_within_a_second_while_a_shader_runs_on() {
+    let fx = Fixture::new();
+    // A limit the test never reaches: the shader is still running.
+    let mut p = Child::start(&fx, &["--debounce-ms", "40", "--time-limit", "100"]);
+    p.wait_line("the first render", false, |l| {
+        l.starts_with("reload 0: start")
+    });
+    let good = fx.output();
+    std::fs::write(
+        fx.shader_path(),
+        never_ending(&fx.shader_original, "shininess"),
+    )
+    .unwrap();
+    // The reload compiles (well under a second on lavapipe) and then spins.
+    std::thread::sleep(Duration::from_secs(3));
+    assert!(p.child.try_wait().unwrap().is_none());
+    let took = interrupt(&mut p.child);
+    assert!(took < Duration::from_secs(1), "SIGINT took {took:?}");
+    assert_eq!(fx.output(), good, "the last good image is kept");
+    assert_eq!(leftovers(fx.dir.path()), Vec::<String>::new());
+}
+
+/// Files in `dir` other than the fixture's.
+fn leftovers(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !["shaders", "scene.json", "out.png"].contains(&n.as_str()))
+        .collect()
+}
