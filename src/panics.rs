@@ -69,10 +69,11 @@ pub fn install_hook() {
             .location()
             .map(|l| format!(" at {}:{}", l.file(), l.line()))
             .unwrap_or_default();
-        eprintln!(
-            "error: {file}: internal error: {}{at} (a bug in penumbra: please report it with this input)",
+        let line = format!(
+            "{file}: internal error: {}{at} (a bug in penumbra: please report it with this input)",
             message(info.payload())
         );
+        eprintln!("error: {}", crate::terminal::diagnostic(&line));
     }));
 }
 
