@@ -561,9 +561,10 @@ impl Renderer {
         self.context.set_time_limit(limit)
     }
 
-    /// The longest one submission has run so far ([`Context::longest_wait`]).
-    pub fn longest_wait(&self) -> Duration {
-        self.context.longest_wait()
+    /// The longest one submission has run since the last call
+    /// ([`Context::take_longest_wait`]).
+    pub fn take_longest_wait(&self) -> Duration {
+        self.context.take_longest_wait()
     }
 
     /// Whether a wait ran past the time limit: the device still runs that

@@ -577,14 +577,14 @@ impl Context {
         self.shared.is_hung()
     }
 
-    /// The longest that one submission has run so far, from submit to its fence (the driver's
-    /// compile at a pipeline's first dispatch included): how far the work stays from
-    /// [`Context::time_limit`] (tools/watchdog_margin.rs).
-    pub fn longest_wait(&self) -> Duration {
-        Duration::from_nanos(self.longest_wait.load(std::sync::atomic::Ordering::Relaxed))
+    /// The longest that one submission has run since the last call, from submit to its fence
+    /// (the driver's compile at a pipeline's first dispatch included): how far the work stays
+    /// from [`Context::time_limit`] (tools/watchdog_margin.rs).
+    pub fn take_longest_wait(&self) -> Duration {
+        Duration::from_nanos(self.longest_wait.swap(0, std::sync::atomic::Ordering::Relaxed))
     }
 
-    /// Records one wait for [`Context::longest_wait`].
+    /// Records one wait for [`Context::take_longest_wait`].
     pub(crate) fn record_wait(&self, wait: Duration) {
         let nanos = u64::try_from(wait.as_nanos()).unwrap_or(u64::MAX);
         self.longest_wait
