@@ -85,22 +85,21 @@ fn read_head(stream: &mut TcpStream, timeout: Duration) -> Result<Vec<u8>, Optio
 /// no body); the image is 404 until there is one.
 fn respond(stream: &mut TcpStream, req: Request, live: &Live) -> std::io::Result<()> {
     let png;
-    let (content_type, body): (&str, &[u8]) = match req.route {
-        Route::Page => ("text/html; charset=utf-8", super::page::PAGE.as_bytes()),
+    let answer = match req.route {
+        Route::Page => Answer::ok("text/html; charset=utf-8", super::page::PAGE.as_bytes()),
         Route::Image => {
             png = live.snapshot().png;
             if png.is_empty() {
-                return write_answer(
-                    stream,
-                    404,
-                    "Not Found",
-                    "text/plain",
-                    b"no image yet\n",
-                    req.method,
-                    "",
-                );
+                Answer {
+                    code: 404,
+                    reason: "Not Found",
+                    content_type: TEXT,
+                    body: b"no image yet\n",
+                    extra: "",
+                }
+            } else {
+                Answer::ok("image/png", &png)
             }
-            ("image/png", png.as_slice())
         }
         Route::Events => {
             // `HEAD /events`: the stream's headers, no stream.
@@ -110,63 +109,88 @@ fn respond(stream: &mut TcpStream, req: Request, live: &Live) -> std::io::Result
                 .and_then(|_| stream.flush());
         }
     };
-    write_answer(stream, 200, "OK", content_type, body, req.method, "")
+    answer.write(stream, req.method)
 }
 
 /// Answers a refusal with its status and small fixed body.
 fn refuse(stream: &mut TcpStream, refusal: Refusal) -> std::io::Result<()> {
-    let (code, reason, body) = refusal.status();
-    let extra = if refusal == Refusal::Method {
-        "Allow: GET, HEAD\r\n"
-    } else {
-        ""
-    };
-    write_answer(
-        stream,
-        code,
-        reason,
-        "text/plain; charset=utf-8",
-        body.as_bytes(),
-        Method::Get,
-        extra,
-    )
+    Answer::refusal(refusal).write(stream, Method::Get)
 }
 
 /// The fixed answer of a connection that is refused before it is served
 /// (the accept loop's cap): small enough for a new socket's send buffer.
 pub(super) fn busy_answer() -> Vec<u8> {
-    let (code, reason, body) = Refusal::Busy.status();
-    let mut out = head(code, reason, "text/plain; charset=utf-8", body.len(), "").into_bytes();
-    out.extend_from_slice(body.as_bytes());
+    let answer = Answer::refusal(Refusal::Busy);
+    let mut out = answer.head().into_bytes();
+    out.extend_from_slice(answer.body);
     out
 }
 
-/// Writes a status line, the headers and (for `GET`) the body.
-fn write_answer(
-    stream: &mut TcpStream,
+/// The content type of every refusal.
+const TEXT: &str = "text/plain; charset=utf-8";
+
+/// One answer; every answer closes its connection.
+struct Answer<'a> {
     code: u16,
-    reason: &str,
-    content_type: &str,
-    body: &[u8],
-    method: Method,
-    extra: &str,
-) -> std::io::Result<()> {
-    let head = head(code, reason, content_type, body.len(), extra);
-    stream.write_all(head.as_bytes())?;
-    if method == Method::Get {
-        stream.write_all(body)?;
+    reason: &'static str,
+    content_type: &'static str,
+    body: &'a [u8],
+    /// Header lines beyond the usual ones, each ending in `\r\n`.
+    extra: &'static str,
+}
+
+impl<'a> Answer<'a> {
+    /// A 200 with `body`.
+    fn ok(content_type: &'static str, body: &'a [u8]) -> Answer<'a> {
+        Answer {
+            code: 200,
+            reason: "OK",
+            content_type,
+            body,
+            extra: "",
+        }
     }
-    stream.flush()
+
+    /// The answer to a refusal (a 405 names the methods allowed).
+    fn refusal(refusal: Refusal) -> Answer<'static> {
+        let (code, reason, body) = refusal.status();
+        Answer {
+            code,
+            reason,
+            content_type: TEXT,
+            body: body.as_bytes(),
+            extra: if refusal == Refusal::Method {
+                "Allow: GET, HEAD\r\n"
+            } else {
+                ""
+            },
+        }
+    }
+
+    /// The status line and headers.
+    fn head(&self) -> String {
+        format!(
+            "HTTP/1.1 {} {}\r\nContent-Type: {}\r\nContent-Length: {}\r\n\
+             Cache-Control: no-store\r\nConnection: close\r\n{}\r\n",
+            self.code,
+            self.reason,
+            self.content_type,
+            self.body.len(),
+            self.extra
+        )
+    }
+
+    /// Writes the head and, for `GET`, the body.
+    fn write(&self, stream: &mut TcpStream, method: Method) -> std::io::Result<()> {
+        stream.write_all(self.head().as_bytes())?;
+        if method == Method::Get {
+            stream.write_all(self.body)?;
+        }
+        stream.flush()
+    }
 }
 
-/// A response head: every answer closes its connection.
-fn head(code: u16, reason: &str, content_type: &str, len: usize, extra: &str) -> String {
-    format!(
-        "HTTP/1.1 {code} {reason}\r\nContent-Type: {content_type}\r\nContent-Length: {len}\r\n\
-         Cache-Control: no-store\r\nConnection: close\r\n{extra}\r\n"
-    )
-}
-
+/// The head of an event stream (no length: it ends when the connection does).
 fn events_head() -> &'static str {
     "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n"
 }
