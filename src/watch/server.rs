@@ -1,5 +1,5 @@
-//! The live preview page (`--serve`): a small HTTP server (tiny_http) with
-//! three routes:
+//! The live preview page (`--serve`): a small HTTP server with three
+//! routes:
 //!
 //! * `/` — the page: the latest image, the current error drawn over it, and
 //!   the timing line of the last reload;
@@ -7,18 +7,37 @@
 //! * `/events` — server-sent events: one `frame` event (JSON: `version`,
 //!   `error`, `line`) at connection and after every change; the page swaps
 //!   the image when `version` changes. No polling: the browser keeps this one
-//!   connection open, and each client gets a thread of its own.
+//!   connection open.
+//!
+//! It serves these and nothing else, whatever a client sends (issue 36):
+//! only `GET` and `HEAD`; a request that announces a body is refused from
+//! its headers without reading the body; the request head is bounded in
+//! bytes, target length and header count ([`request`]) and must arrive
+//! within [`Limits::head_timeout`]. The accept loop only accepts: each
+//! connection is served on a thread of its own (small stack) with a write
+//! timeout, so a slow or non-reading client stalls only itself, and the
+//! number of connections (and so of threads) is capped by
+//! [`Limits::max_connections`]; beyond it a client gets a fixed 503 and is
+//! closed, without a thread. Every answer closes its connection (pipelined
+//! requests after the first are not read), except `/events`, which streams.
+//!
+//! std's `TcpListener` and the `httparse` parser, not an HTTP server crate:
+//! tiny_http, used before, allocated a request body of any announced size
+//! (one `Content-Length` aborted the process) and wrote responses on the
+//! accept thread.
 
-use std::io::Write;
-use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, Ordering};
+mod connection;
+mod page;
+pub mod request;
+
+use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
 /// The port `--serve` uses when none is given.
 pub const DEFAULT_PORT: u16 = 8737;
-
 /// What the page shows; shared between the loop and the server threads.
 #[derive(Default)]
 pub struct Live {
@@ -99,214 +118,189 @@ pub fn parse_addr(s: &str) -> Result<SocketAddr, String> {
         .ok_or_else(|| format!("`{s}` is not an address: expected HOST:PORT, PORT or an IP"))
 }
 
+/// The server's bounds. [`Server::start`] uses the defaults; tests and
+/// tools/live_load.rs may set others.
+#[derive(Clone, Debug)]
+pub struct Limits {
+    /// The most connections served at once, each on a thread of its own;
+    /// one more is answered 503 and closed by the accept loop.
+    pub max_connections: usize,
+    /// The time a client has to send its whole request head.
+    pub head_timeout: Duration,
+    /// The longest a write to a client may block (an answer, or one event
+    /// of a stream); a client that does not read for that long is closed.
+    pub write_timeout: Duration,
+}
+
+impl Default for Limits {
+    /// 512 connections (a browser needs two or three; hundreds of event
+    /// streams fit), 10 s for the head, 10 s per write.
+    fn default() -> Limits {
+        Limits {
+            max_connections: 512,
+            head_timeout: Duration::from_secs(10),
+            write_timeout: Duration::from_secs(10),
+        }
+    }
+}
+
+/// The stack of a connection's thread: it parses one head (httparse's
+/// header array, 2 KiB) and formats small answers; the 2 MiB default would
+/// reserve a gigabyte of address space at the connection cap.
+const CONNECTION_STACK: usize = 64 * 1024;
+
+/// What the accept loop and the connection threads share.
+struct Shared {
+    live: Arc<Live>,
+    limits: Limits,
+    /// Set when the server stops.
+    stop: AtomicBool,
+    /// Connections being served (each holds a [`Slot`]).
+    active: AtomicUsize,
+}
+
+impl Shared {
+    fn stopping(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// One of the [`Limits::max_connections`] places; given back when dropped,
+/// also when a connection's thread unwinds or fails to start.
+struct Slot(Arc<Shared>);
+
+impl Slot {
+    /// A place, if the cap allows one more connection.
+    fn take(shared: &Arc<Shared>) -> Option<Slot> {
+        let max = shared.limits.max_connections;
+        shared
+            .active
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| {
+                (n < max).then_some(n + 1)
+            })
+            .ok()
+            .map(|_| Slot(shared.clone()))
+    }
+}
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.active.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
 /// A running server.
 pub struct Server {
     /// The address it listens on (the real port when 0 was asked for).
     pub addr: SocketAddr,
-    server: Arc<tiny_http::Server>,
+    shared: Arc<Shared>,
     thread: Option<JoinHandle<()>>,
-    live: Arc<Live>,
 }
 
 impl Server {
-    /// Starts serving `live` on `addr`.
+    /// Starts serving `live` on `addr` with the default [`Limits`].
     pub fn start(addr: SocketAddr, live: Arc<Live>) -> anyhow::Result<Server> {
-        let server = Arc::new(
-            tiny_http::Server::http(addr)
-                .map_err(|e| anyhow::anyhow!("--serve {addr}: cannot listen: {e}"))?,
-        );
-        let addr = server
-            .server_addr()
-            .to_ip()
-            .ok_or_else(|| anyhow::anyhow!("--serve {addr}: not an IP address"))?;
+        Server::start_with(addr, live, Limits::default())
+    }
+
+    /// Starts serving `live` on `addr` within `limits`.
+    pub fn start_with(addr: SocketAddr, live: Arc<Live>, limits: Limits) -> anyhow::Result<Server> {
+        let listener = TcpListener::bind(addr)
+            .map_err(|e| anyhow::anyhow!("--serve {addr}: cannot listen: {e}"))?;
+        let addr = listener
+            .local_addr()
+            .map_err(|e| anyhow::anyhow!("--serve {addr}: {e}"))?;
+        let shared = Arc::new(Shared {
+            live,
+            limits,
+            stop: AtomicBool::new(false),
+            active: AtomicUsize::new(0),
+        });
         let thread = {
-            let server = server.clone();
-            let live = live.clone();
+            let shared = shared.clone();
             std::thread::Builder::new()
                 .name("watch-http".into())
-                .spawn(move || accept(&server, &live))?
+                .spawn(move || accept(&listener, &shared))?
         };
         Ok(Server {
             addr,
-            server,
+            shared,
             thread: Some(thread),
-            live,
         })
+    }
+
+    /// The connections being served now.
+    pub fn connections(&self) -> usize {
+        self.shared.active.load(Ordering::Acquire)
     }
 }
 
 impl Drop for Server {
+    /// Stops accepting, ends every event stream and joins the accept loop
+    /// (woken by a connection of its own). Connections being answered end
+    /// on their own, within their timeouts.
     fn drop(&mut self) {
-        self.live.stop();
-        self.server.unblock();
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
-}
-
-fn accept(server: &tiny_http::Server, live: &Arc<Live>) {
-    let stopped = Arc::new(AtomicBool::new(false));
-    for req in server.incoming_requests() {
-        let path = req.url().split('?').next().unwrap_or("").to_string();
-        let result = match (req.method(), path.as_str()) {
-            (tiny_http::Method::Get, "/") => req.respond(
-                tiny_http::Response::from_string(PAGE)
-                    .with_header(header("Content-Type", "text/html; charset=utf-8")),
-            ),
-            (tiny_http::Method::Get, "/image.png") => {
-                let png = live.snapshot().png;
-                if png.is_empty() {
-                    req.respond(
-                        tiny_http::Response::from_string("no image yet").with_status_code(404),
-                    )
-                } else {
-                    req.respond(
-                        tiny_http::Response::from_data(png.as_slice())
-                            .with_header(header("Content-Type", "image/png"))
-                            .with_header(header("Cache-Control", "no-store")),
-                    )
-                }
-            }
-            (tiny_http::Method::Get, "/events") => {
-                let live = live.clone();
-                let stopped = stopped.clone();
-                let _ = std::thread::Builder::new()
-                    .name("watch-sse".into())
-                    .spawn(move || stream_events(req.into_writer(), &live, &stopped));
-                Ok(())
-            }
-            _ => req.respond(tiny_http::Response::from_string("not found").with_status_code(404)),
+        self.shared.stop.store(true, Ordering::Relaxed);
+        self.shared.live.stop();
+        let ip = match self.addr.ip() {
+            IpAddr::V4(ip) if ip.is_unspecified() => IpAddr::V4(Ipv4Addr::LOCALHOST),
+            IpAddr::V6(ip) if ip.is_unspecified() => IpAddr::V6(Ipv6Addr::LOCALHOST),
+            ip => ip,
         };
-        // A client that went away is not our problem.
-        let _ = result;
+        let wake = SocketAddr::new(ip, self.addr.port());
+        let woken = TcpStream::connect_timeout(&wake, Duration::from_secs(1)).is_ok();
+        if let Some(t) = self.thread.take() {
+            // Unwoken, the loop ends at the next connection or with the process.
+            if woken {
+                let _ = t.join();
+            }
+        }
     }
-    stopped.store(true, Ordering::Relaxed);
 }
 
-fn header(name: &str, value: &str) -> tiny_http::Header {
-    tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("valid header")
+/// The accept loop: hands each connection to a thread of its own, or, at
+/// the cap, answers 503 without one. It never reads or blocks on a client.
+fn accept(listener: &TcpListener, shared: &Arc<Shared>) {
+    for conn in listener.incoming() {
+        if shared.stopping() {
+            return;
+        }
+        match conn {
+            Ok(stream) => admit(stream, shared),
+            // Out of file descriptors, or a connection reset before it was
+            // accepted: wait a little rather than spin.
+            Err(_) => std::thread::sleep(Duration::from_millis(10)),
+        }
+    }
 }
 
-/// One server-sent event stream; ends when the client goes away or the
-/// server stops.
-fn stream_events(mut w: Box<dyn Write + Send>, live: &Live, stopped: &AtomicBool) {
-    let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n";
-    if w.write_all(head.as_bytes())
-        .and_then(|_| w.flush())
-        .is_err()
-    {
+/// Serves `stream` on a new thread if the cap allows, else refuses it.
+fn admit(stream: TcpStream, shared: &Arc<Shared>) {
+    let Some(slot) = Slot::take(shared) else {
+        refuse_busy(stream);
         return;
-    }
-    let mut state = live.snapshot();
-    loop {
-        if state.stopped || stopped.load(Ordering::Relaxed) {
-            return;
-        }
-        let data = serde_json::json!({
-            "version": state.image_version,
-            "error": state.error,
-            "line": state.line,
+    };
+    let shared = shared.clone();
+    // When the thread cannot start, the closure (the slot and the stream
+    // with it) is dropped: the place is given back and the client closed.
+    let _ = std::thread::Builder::new()
+        .name("watch-http-conn".into())
+        .stack_size(CONNECTION_STACK)
+        .spawn(move || {
+            let _slot = slot;
+            connection::serve(stream, &shared);
         });
-        let msg = format!("event: frame\ndata: {data}\n\n");
-        if w.write_all(msg.as_bytes()).and_then(|_| w.flush()).is_err() {
-            return;
-        }
-        let seen = state.version;
-        loop {
-            state = live.wait_change(seen, Duration::from_secs(15));
-            if state.version != seen || state.stopped {
-                break;
-            }
-            // A comment line keeps proxies and the client's idle timer happy
-            // and notices a client that went away.
-            if w.write_all(b": keep-alive\n\n")
-                .and_then(|_| w.flush())
-                .is_err()
-            {
-                return;
-            }
-        }
-    }
 }
 
-/// The page. The image is swapped only when a new one is complete, so the
-/// page never shows a blank or half-loaded frame.
-const PAGE: &str = r#"<!doctype html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<title>penumbra watch</title>
-<style>
-  body { margin: 0; background: #111; color: #ddd; font: 14px/1.4 system-ui, sans-serif; }
-  #view { position: relative; display: inline-block; }
-  #image { display: block; max-width: 100vw; image-rendering: pixelated; }
-  #error { position: absolute; left: 0; right: 0; top: 0; margin: 0; padding: 12px;
-           background: rgba(110, 0, 0, 0.85); color: #fff; white-space: pre-wrap;
-           font: 13px/1.35 ui-monospace, monospace; }
-  #line { padding: 6px 10px; font: 12px/1.4 ui-monospace, monospace; color: #aaa; }
-  #status { padding: 6px 10px; color: #888; }
-</style>
-</head>
-<body>
-<div id="view">
-  <img id="image" alt="latest render">
-  <pre id="error" hidden></pre>
-</div>
-<div id="line"></div>
-<div id="status">connecting…</div>
-<script>
-  const image = document.getElementById('image');
-  const error = document.getElementById('error');
-  const line = document.getElementById('line');
-  const status = document.getElementById('status');
-  let shown = 0;
-  const events = new EventSource('/events');
-  events.addEventListener('open', () => { status.textContent = 'live'; });
-  events.addEventListener('error', () => { status.textContent = 'disconnected; reconnecting…'; });
-  events.addEventListener('frame', (e) => {
-    const d = JSON.parse(e.data);
-    if (d.version > 0 && d.version !== shown) {
-      const next = new Image();
-      // Loads can finish out of order: never go back to an older image.
-      next.onload = () => {
-        if (d.version > Number(image.dataset.version || 0)) {
-          image.src = next.src;
-          image.dataset.version = d.version;
-        }
-      };
-      next.src = '/image.png?v=' + d.version;
-      shown = d.version;
+/// The 503 of a connection beyond the cap, written without blocking (it
+/// fits a new socket's send buffer; if not, the client just sees the close).
+fn refuse_busy(mut stream: TcpStream) {
+    use std::io::Write;
+    if stream.set_nonblocking(true).is_ok() {
+        let _ = stream.write_all(&connection::busy_answer());
     }
-    error.textContent = d.error || '';
-    error.hidden = !d.error;
-    line.textContent = d.line;
-  });
-</script>
-</body>
-</html>
-"#;
+    let _ = stream.shutdown(std::net::Shutdown::Write);
+}
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn addresses() {
-        assert_eq!(
-            parse_addr("127.0.0.1:8737").unwrap().to_string(),
-            "127.0.0.1:8737"
-        );
-        assert_eq!(parse_addr("9000").unwrap().to_string(), "127.0.0.1:9000");
-        assert_eq!(parse_addr(":9000").unwrap().to_string(), "127.0.0.1:9000");
-        assert_eq!(parse_addr("0.0.0.0").unwrap().to_string(), "0.0.0.0:8737");
-        assert_eq!(parse_addr("[::1]:80").unwrap().to_string(), "[::1]:80");
-        assert!(parse_addr("not an address").is_err());
-    }
-
-    #[test]
-    fn the_page_listens_and_does_not_poll() {
-        assert!(PAGE.contains("new EventSource('/events')"));
-        assert!(!PAGE.contains("setInterval") && !PAGE.contains("setTimeout"));
-    }
-}
+mod tests;

@@ -98,3 +98,52 @@ fn serve_rejects_a_bad_address_and_an_unwritable_output() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("does not exist"), "{err}");
 }
+
+/// Sends `request` to the live page on a new connection and returns the
+/// answer's status line (empty when the connection ended without one).
+fn status_line(addr: &str, request: &[u8]) -> String {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(5)))
+        .unwrap();
+    s.write_all(request).unwrap();
+    let mut answer = Vec::new();
+    let _ = s.read_to_end(&mut answer);
+    let text = String::from_utf8_lossy(&answer);
+    text.lines().next().unwrap_or("").to_string()
+}
+
+/// The tester's attacks on `watch --serve` (issue 36): a terabyte
+/// `Content-Length` aborted the process; now it is refused and the page,
+/// and the loop, go on.
+#[test]
+fn serve_survives_a_huge_body_and_still_follows_edits() {
+    let fx = Fixture::new();
+    let mut p = Child::start(&fx, &["--serve", "127.0.0.1:0", "--debounce-ms", "40"]);
+    let serving = p.wait_line("the server address", false, |l| {
+        l.starts_with("serving the live preview at ")
+    });
+    let url = serving.rsplit(' ').next().unwrap();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    p.wait_line("the first render", false, |l| l.starts_with("reload 0:"));
+
+    let huge = b"POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 1000000000000\r\n\r\n";
+    assert!(status_line(&addr, huge).starts_with("HTTP/1.1 413 "));
+    let delete = b"DELETE /image.png HTTP/1.1\r\n\r\n";
+    assert!(status_line(&addr, delete).starts_with("HTTP/1.1 405 "));
+    let image = b"GET /image.png?v=1 HTTP/1.1\r\n\r\n";
+    assert!(status_line(&addr, image).starts_with("HTTP/1.1 200 "));
+    assert!(p.child.try_wait().unwrap().is_none(), "still running");
+
+    std::fs::write(
+        fx.shader_path(),
+        fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
+    )
+    .unwrap();
+    p.wait_line("reload 1", false, |l| l.starts_with("reload 1:"));
+    assert_eq!(fx.centre()[0], 0);
+    assert!(status_line(&addr, image).starts_with("HTTP/1.1 200 "));
+}

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p penumbra-tools --bin fuzz -- [--cases N] [--seconds S] [--seed S]
-//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR]
+//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,request] [--out DIR]
 //! cargo run --release -p penumbra-tools --bin fuzz -- --replay FILE...
 //! cargo run --release -p penumbra-tools --bin fuzz -- --write-seeds DIR
 //! ```
@@ -17,6 +17,7 @@
 
 mod judge;
 mod mutate;
+mod request;
 mod seeds;
 mod targets;
 
@@ -50,7 +51,7 @@ struct Args {
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
     eprintln!(
-        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR] | --replay FILE..."
+        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,request] [--out DIR] | --replay FILE..."
     );
     std::process::exit(2)
 }
@@ -377,6 +378,7 @@ fn make_case(
             mutate::mutate_bytes(&mut data, byte_donors, rng);
             data
         }
+        Target::Request => request::mutate(&seed.data, byte_donors, rng),
         Target::Json | Target::Gltf => {
             if rng.one_in(4) {
                 let mut data = seed.data.clone();

@@ -93,6 +93,7 @@ pub fn all() -> Vec<Seed> {
         name,
         data,
     });
+    seeds.extend(super::request::seeds());
     seeds
 }
 

@@ -26,16 +26,19 @@ pub enum Target {
     /// A part file of a split render (`.exr`), merged with a valid second
     /// part by `penumbra merge`'s `plan` and `write`.
     Part,
+    /// A request head to the live page's parser (`watch --serve`).
+    Request,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 5] = [
+    pub const ALL: [Target; 6] = [
         Target::Json,
         Target::Gltf,
         Target::Glb,
         Target::Wgsl,
         Target::Part,
+        Target::Request,
     ];
 
     /// The file extension (also the name on the command line).
@@ -46,6 +49,7 @@ impl Target {
             Target::Glb => "glb",
             Target::Wgsl => "wgsl",
             Target::Part => "exr",
+            Target::Request => "request",
         }
     }
 
@@ -202,6 +206,14 @@ impl Workspace {
                         .map_err(|e| format!("{e:#}"))?;
                     penumbra::farm::merge::write(&plan, &out).map_err(|e| format!("{e:#}"))
                 });
+            }
+            Target::Request => {
+                len = data.len();
+                if let Err(o) = write_case(&self.case_path(target), data) {
+                    return o;
+                }
+                judge::start_case();
+                result = penumbra::panics::catch(|| super::request::run(data));
             }
             _ => {
                 let path = self.case_path(target);
