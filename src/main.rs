@@ -1005,7 +1005,7 @@ fn watch(args: WatchArgs) -> anyhow::Result<()> {
 }
 
 /// How long Ctrl-C lets `watch` end by itself before ending it.
-const WATCH_STOP_GRACE: std::time::Duration = std::time::Duration::from_millis(600);
+const WATCH_STOP_GRACE: std::time::Duration = std::time::Duration::from_millis(300);
 
 /// Ends the process at once with `code`, without running exit handlers: after
 /// a time-out the device still runs the dispatch that never ends, and the

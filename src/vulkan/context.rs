@@ -581,7 +581,10 @@ impl Context {
     /// (the driver's compile at a pipeline's first dispatch included): how far the work stays
     /// from [`Context::time_limit`] (tools/watchdog_margin.rs).
     pub fn take_longest_wait(&self) -> Duration {
-        Duration::from_nanos(self.longest_wait.swap(0, std::sync::atomic::Ordering::Relaxed))
+        Duration::from_nanos(
+            self.longest_wait
+                .swap(0, std::sync::atomic::Ordering::Relaxed),
+        )
     }
 
     /// Records one wait for [`Context::take_longest_wait`].

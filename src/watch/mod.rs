@@ -296,7 +296,13 @@ impl Watch {
         let mut set = watch_set(&session, &shader_files);
         if let Some(q) = &quarantine {
             // The scene is not loaded before a change: watch what hung.
-            set.scene.extend(q.files.iter().cloned());
+            let hung: Vec<PathBuf> = q
+                .files
+                .iter()
+                .filter(|f| !set.shaders.contains(*f))
+                .cloned()
+                .collect();
+            set.scene.extend(hung);
         }
         let watcher = FileWatcher::new(set, opts.debounce)?;
 

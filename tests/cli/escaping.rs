@@ -39,7 +39,10 @@ fn assert_escaped(code: Option<i32>, stderr: &str, must: &[&str]) {
         .chars()
         .filter(|c| c.is_control())
         .collect();
-    assert!(raw.is_empty(), "raw control characters {raw:?} in {stderr:?}");
+    assert!(
+        raw.is_empty(),
+        "raw control characters {raw:?} in {stderr:?}"
+    );
     for m in must {
         assert!(stderr.contains(m), "must contain {m:?}: {stderr:?}");
     }
@@ -60,8 +63,14 @@ fn scene_with_texture(name: &str) -> String {
 
 #[test]
 fn a_texture_name_with_control_characters_is_escaped() {
-    let (code, stderr) = render(&scene_with_texture("x\u{1b}[31mred\r\nerror: forged\u{0}.png"));
-    assert_escaped(code, &stderr, &["\\u{1b}[31mred\\u{d}\\u{a}error: forged\\u{0}.png"]);
+    let (code, stderr) = render(&scene_with_texture(
+        "x\u{1b}[31mred\r\nerror: forged\u{0}.png",
+    ));
+    assert_escaped(
+        code,
+        &stderr,
+        &["\\u{1b}[31mred\\u{d}\\u{a}error: forged\\u{0}.png"],
+    );
 }
 
 #[test]
@@ -72,7 +81,10 @@ fn bidirectional_overrides_are_escaped() {
 
 #[test]
 fn a_gltf_uri_with_control_characters_is_escaped_also_percent_encoded() {
-    for uri in ["mesh\u{1b}]0;title\u{7}.bin", "mesh%1B%5B2J%0Aerror:%20forged.bin"] {
+    for uri in [
+        "mesh\u{1b}]0;title\u{7}.bin",
+        "mesh%1B%5B2J%0Aerror:%20forged.bin",
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let gltf = serde_json::json!({
             "asset": {"version": "2.0"},
@@ -95,9 +107,16 @@ fn a_gltf_uri_with_control_characters_is_escaped_also_percent_encoded() {
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&result.stderr);
-        let errors: Vec<&str> = stderr.lines().filter(|l| !l.starts_with("note: ")).collect();
+        let errors: Vec<&str> = stderr
+            .lines()
+            .filter(|l| !l.starts_with("note: "))
+            .collect();
         assert_eq!(errors.len(), 1, "{stderr:?}");
-        assert_escaped(result.status.code(), &format!("{}\n", errors[0]), &["model.gltf"]);
+        assert_escaped(
+            result.status.code(),
+            &format!("{}\n", errors[0]),
+            &["model.gltf"],
+        );
         assert!(!dir.path().join("out.png").exists());
     }
 }

@@ -99,8 +99,21 @@ fn time_limit_values_are_checked() {
 #[test]
 fn watch_survives_a_shader_that_never_ends() {
     let fx = Fixture::new();
-    let mut p = Child::start(&fx, &["--debounce-ms", "40", "--time-limit", "2"]);
+    let mut p = Child::start(
+        &fx,
+        &[
+            "--debounce-ms",
+            "40",
+            "--time-limit",
+            "2",
+            "--serve",
+            "127.0.0.1:0",
+        ],
+    );
     let pid = p.child.id();
+    let serving = p.wait_line("the page", false, |l| {
+        l.starts_with("serving the live preview at ")
+    });
     p.wait_line("the first render", false, |l| {
         l.starts_with("reload 0: start")
     });
@@ -123,11 +136,24 @@ fn watch_survives_a_shader_that_never_ends() {
     let line = p.wait_line("reload 1", false, |l| l.starts_with("reload 1:"));
     assert!(line.contains("ERROR: kept the last good image"), "{line}");
     p.wait_line("the restart", false, |l| l.starts_with("restarting: "));
+    // The page is back at the same address (the port was 0), with that image.
+    let again = p.wait_line("the page again", false, |l| {
+        l.starts_with("serving the live preview at ")
+    });
+    assert_eq!(again, serving);
+    let addr = serving
+        .trim_start_matches("serving the live preview at http://")
+        .trim_end_matches('/');
     // The new process does not run the same files again; same pid.
     let line = p.wait_line("reload 2", false, |l| l.starts_with("reload 2: restart"));
     assert!(line.contains("ERROR: kept the last good image"), "{line}");
     assert_eq!(p.child.id(), pid);
     assert_eq!(fx.output(), good, "the last good image is kept");
+    assert_eq!(
+        get(addr, "/image.png"),
+        good,
+        "the page shows the last good image"
+    );
 
     // The next good save renders.
     save_by_rename(
@@ -176,4 +202,26 @@ fn leftovers(dir: &Path) -> Vec<String> {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| !["shaders", "scene.json", "out.png"].contains(&n.as_str()))
         .collect()
+}
+
+/// The body of `GET path` from the live page at `addr`.
+fn get(addr: &str, path: &str) -> Vec<u8> {
+    use std::io::{Read, Write};
+    let mut c = std::net::TcpStream::connect(addr).unwrap();
+    c.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(
+        c,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut bytes = Vec::new();
+    c.read_to_end(&mut bytes).unwrap();
+    let head_end = bytes
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("a response head")
+        + 4;
+    let head = String::from_utf8_lossy(&bytes[..head_end]).into_owned();
+    assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+    bytes.split_off(head_end)
 }
