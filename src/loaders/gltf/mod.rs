@@ -12,6 +12,7 @@
 //! and can panic on inconsistent files. Every range is checked before a byte is
 //! read, so no file content can make this module panic.
 
+mod indices;
 mod material;
 mod tangents;
 
@@ -444,6 +445,13 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
     let invalid = |field: String, e: &dyn std::fmt::Display| {
         SceneError::new(path, field, format!("invalid glTF JSON: {e}"))
     };
+    // Indices above u32 first: the crate would wrap them (module [`indices`]).
+    // A file that is not JSON is left to the parse below, which names where.
+    if let Ok(value) = serde_json::from_slice::<serde_json::Value>(json) {
+        if let Some((field, message)) = indices::first_oversized_index(&value) {
+            return Err(SceneError::new(path, field, message));
+        }
+    }
     let mut de = serde_json::Deserializer::from_slice(json);
     let root: gltf::json::Root = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let field = Some(e.path().to_string())
