@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p penumbra-tools --bin fuzz -- [--cases N] [--seconds S] [--seed S]
-//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR]
+//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,texture] [--out DIR]
 //! cargo run --release -p penumbra-tools --bin fuzz -- --replay FILE...
 //! cargo run --release -p penumbra-tools --bin fuzz -- --write-seeds DIR
 //! ```
@@ -19,6 +19,7 @@ mod judge;
 mod mutate;
 mod seeds;
 mod targets;
+mod texture;
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
@@ -50,7 +51,7 @@ struct Args {
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
     eprintln!(
-        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr] [--out DIR] | --replay FILE..."
+        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,texture] [--out DIR] | --replay FILE..."
     );
     std::process::exit(2)
 }
@@ -242,14 +243,14 @@ fn worker(args: &Args, id: usize) -> ExitCode {
         let seed = pick_seed(&seeds, &mut rng).clone();
         let data = make_case(&seed, &json_donors, &byte_donors, &mut rng);
         // Written first, so that the supervisor can save the case if this
-        // process dies: the target, and for WGSL the text (a scene case is
-        // the case file itself).
+        // process dies: the target, and for WGSL and textures the bytes (a
+        // scene case is the case file itself).
         if last_target != Some(seed.target) {
             let _ = std::fs::write(&current, format!("{}\n", seed.target.ext()));
             last_target = Some(seed.target);
         }
-        if seed.target == Target::Wgsl {
-            let _ = std::fs::write(ws.case_path(Target::Wgsl), &data);
+        if matches!(seed.target, Target::Wgsl | Target::Texture) {
+            let _ = std::fs::write(ws.case_path(seed.target), &data);
         }
         stuck.arm();
         let restrict = rng.one_in(4);
@@ -377,6 +378,7 @@ fn make_case(
             mutate::mutate_bytes(&mut data, byte_donors, rng);
             data
         }
+        Target::Texture => texture::mutate(&seed.data, byte_donors, rng),
         Target::Json | Target::Gltf => {
             if rng.one_in(4) {
                 let mut data = seed.data.clone();

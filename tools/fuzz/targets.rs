@@ -26,16 +26,20 @@ pub enum Target {
     /// A part file of a split render (`.exr`), merged with a valid second
     /// part by `penumbra merge`'s `plan` and `write`.
     Part,
+    /// An image (PNG, JPEG or OpenEXR bytes) through the texture loader
+    /// under a small memory budget (module `texture`).
+    Texture,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 5] = [
+    pub const ALL: [Target; 6] = [
         Target::Json,
         Target::Gltf,
         Target::Glb,
         Target::Wgsl,
         Target::Part,
+        Target::Texture,
     ];
 
     /// The file extension (also the name on the command line).
@@ -46,6 +50,7 @@ impl Target {
             Target::Glb => "glb",
             Target::Wgsl => "wgsl",
             Target::Part => "exr",
+            Target::Texture => "texture",
         }
     }
 
@@ -202,6 +207,13 @@ impl Workspace {
                         .map_err(|e| format!("{e:#}"))?;
                     penumbra::farm::merge::write(&plan, &out).map_err(|e| format!("{e:#}"))
                 });
+            }
+            Target::Texture => {
+                len = data.len();
+                // Well inside the judge's limit, as for the scenes.
+                let budget = (judge::allowed(len) / 2) as u64;
+                judge::start_case();
+                result = penumbra::panics::catch(|| super::texture::run(data, budget));
             }
             _ => {
                 let path = self.case_path(target);
