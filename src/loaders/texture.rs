@@ -115,17 +115,17 @@ fn limits(max_alloc: u64) -> image::Limits {
 
 /// Copies of a texture's device-format mip chain ([`Texture::device_bytes`])
 /// that an upload holds at once: the packed words
-/// (`render::layout::textures`), the staging buffer they are copied
-/// through, and the texel image itself, which on a CPU device such as
-/// lavapipe is host memory too.
-pub const UPLOAD_COPIES: u64 = 3;
+/// (`render::layout::textures`) and the texel image itself, which on a CPU
+/// device such as lavapipe is host memory too (the staging buffer between
+/// them holds one band of at most 64 MiB, `vulkan::MAX_KEPT_STAGING`).
+pub const UPLOAD_COPIES: u64 = 2;
 
 /// The bytes that loading and uploading a `width` × `height` texture
 /// allocate, given the decoder's output of `decoded` bytes: that output,
 /// the RGBA8 texels (the same buffer when the output is RGBA8 already) and
 /// the upload's [`UPLOAD_COPIES`] of its linear RGBA16 mip chain. For a
-/// 9000×9000 1-bit PNG that is 81 MB + 324 MB + 3 × 864 MB, near the
-/// 2.9 GB such a render peaks at.
+/// 9000×9000 1-bit PNG that is 81 MB + 324 MB + 2 × 864 MB = 2.13 GB; such
+/// a render peaks at 2.16 GB on lavapipe (peak RSS, the whole process).
 pub fn texture_bytes(width: u32, height: u32, decoded: u64) -> u64 {
     let rgba8 = u64::from(width) * u64::from(height) * 4;
     let conversion = if decoded == rgba8 { 0 } else { rgba8 };
@@ -176,11 +176,11 @@ mod tests {
             .unwrap();
         let t = decode(&png, None, "g.png", false, &g).unwrap();
         assert_eq!(t.texels, [0, 10, 20, 1, 11, 21].map(|v| [v, v, v, 255]));
-        // The decode, the RGBA8 copy and three copies of the RGBA16 chain.
+        // The decode, the RGBA8 copy and the upload's copies of the RGBA16 chain.
         let device = Texture::device_bytes_of(3, 2);
-        assert_eq!(g.bytes(), 6 + 24 + 3 * device);
+        assert_eq!(g.bytes(), 6 + 24 + UPLOAD_COPIES * device);
         // RGBA8 already: decoded into the texels' own buffer, charged once.
-        assert_eq!(texture_bytes(3, 2, 24), 24 + 3 * device);
+        assert_eq!(texture_bytes(3, 2, 24), 24 + UPLOAD_COPIES * device);
     }
 
     #[test]

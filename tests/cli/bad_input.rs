@@ -1097,7 +1097,7 @@ fn texture_fails(name: &str, image: &[u8], extra: &[&str], must: &[&str]) -> Str
 #[test]
 fn a_png_bomb_is_refused_from_its_header() {
     // 9000×9000 texels in about 10 KB. Decoding it and uploading its mip
-    // chain takes about 3 GB (src/loaders/texture.rs, texture_bytes): a
+    // chain takes about 2.1 GB (src/loaders/texture.rs, texture_bytes): a
     // 1 GiB budget refuses it from the header, before a row is inflated.
     let bomb = png_bomb(9000);
     assert!(bomb.len() < 100_000, "{} bytes", bomb.len());
