@@ -1200,6 +1200,27 @@ fn gltf_texture_transform_errors_name_the_files_field() {
 }
 
 #[test]
+fn gltf_validation_errors_name_the_primitive_not_the_scene_object() {
+    // Scaled by 1e20, the box lies beyond what the kernel's f32 holds; the
+    // scene's validation finds it as objects[0].positions[0].
+    box_textured_fails(
+        |g| {
+            g["nodes"][0]["matrix"] =
+                json!([1e20, 0, 0, 0, 0, 1e20, 0, 0, 0, 0, 1e20, 0, 0, 0, 0, 1]);
+            g["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!({"camera": 0}));
+            g["cameras"] =
+                json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}]);
+            g["scenes"][0]["nodes"] = json!([0, 3]);
+        },
+        "meshes[0].primitives[0].attributes.POSITION",
+        &["vertex 0: must lie within ±1e18", "in world space"],
+    );
+}
+
+#[test]
 fn merge_names_each_repeated_part_once_in_a_bounded_line() {
     // 10,000 copies (hard links) of one part: one line naming the first few
     // and counting the rest, not one that lists every earlier copy for each.

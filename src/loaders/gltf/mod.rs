@@ -12,6 +12,7 @@
 //! and can panic on inconsistent files. Every range is checked before a byte is
 //! read, so no file content can make this module panic.
 
+mod fields;
 mod indices;
 mod material;
 mod tangents;
@@ -54,6 +55,10 @@ pub struct GltfMesh {
     pub maps: SurfaceMaps,
     /// Where it came from, for messages, e.g. `node 'Bunny' mesh 0 primitive 0`.
     pub name: String,
+    /// Its primitive's field in the file, e.g. `meshes[0].primitives[1]`.
+    pub primitive: String,
+    /// Its primitive's `material` index, if it has one.
+    pub material: Option<usize>,
 }
 
 /// The camera of the file, placed by its node's world transform.
@@ -113,7 +118,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     // of first use; the maps stay per object.
     let mut phongs: Vec<Phong> = Vec::new();
     let mut objects = Vec::with_capacity(doc.meshes.len());
+    let mut origins = Vec::with_capacity(doc.meshes.len());
     for m in doc.meshes {
+        origins.push(fields::Origin {
+            primitive: m.primitive,
+            material: m.material,
+        });
         let shader = phongs
             .iter()
             .position(|p| *p == m.phong)
@@ -163,6 +173,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         objects,
         lights,
     };
+    // Named by the file's fields here; `load_scene` validates again, finding nothing.
+    if let Err(e) = scene.validate() {
+        let shader_of: Vec<usize> = scene.objects.iter().map(|o| o.shader).collect();
+        let (field, message) = fields::file_field(&e.field, &e.message, &origins, &shader_of);
+        return Err(SceneError::new(path, field, message));
+    }
     Ok(Loaded {
         scene,
         notes,
@@ -741,6 +757,8 @@ impl Reader<'_> {
             phong: material.phong,
             maps: material.maps,
             name,
+            primitive: field.to_string(),
+            material: prim.material().index(),
         }))
     }
 
