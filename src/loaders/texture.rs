@@ -59,6 +59,7 @@ pub fn decode(
     }
     let decoded = decoder.total_bytes();
     guard.charge_texture(width, height, texture_bytes(width, height, decoded))?;
+    check_holds(format, width, height, bytes.len())?;
     decoder
         .set_limits(limits(decoded.saturating_add(DECODER_SLACK)))
         .map_err(corrupt)?;
@@ -102,6 +103,38 @@ fn format_of(bytes: &[u8], mime: Option<&str>) -> Result<ImageFormat, Refused> {
         }
     }
     Ok(format)
+}
+
+/// The most a zlib stream (PNG's image data) expands: 258 bytes from a
+/// match of two one-bit codes.
+const DEFLATE_MAX_RATIO: u64 = 1032;
+
+/// Refuses a `width` × `height` image whose file of `len` bytes is too
+/// small to hold it whatever its content, before it is decoded: a PNG's
+/// rows hold at least one bit a texel and a filter byte a row, which
+/// zlib shrinks at most [`DEFLATE_MAX_RATIO`] times; a JPEG codes at
+/// least one bit per 8×8 block of its largest component (the DC
+/// difference, in every scan that holds it). A small file that claims a
+/// large image is truncated, and decoders fill what is missing, so it
+/// would otherwise be decoded, uploaded and rendered at full size.
+fn check_holds(format: ImageFormat, width: u32, height: u32, len: usize) -> Result<(), Refused> {
+    let (w, h) = (u64::from(width), u64::from(height));
+    let (least, why) = match format {
+        ImageFormat::Png => (
+            h * (1 + w.div_ceil(8)) / DEFLATE_MAX_RATIO,
+            "a PNG holds at least a bit a texel, compressed at most 1032 times",
+        ),
+        _ => (
+            w.div_ceil(8) * h.div_ceil(8) / 8,
+            "a JPEG codes at least a bit per 8×8 block",
+        ),
+    };
+    if (len as u64) < least {
+        return Err(Refused(format!(
+            "is {width}×{height} texels by its header, but its {len} bytes cannot hold them ({why}: {least} bytes at least); refused before decoding"
+        )));
+    }
+    Ok(())
 }
 
 /// Decoder limits: [`MAX_TEXTURE_SIDE`] a side and `max_alloc` bytes.
@@ -211,10 +244,11 @@ mod tests {
         let g = Guard::new("s.json".as_ref(), &opts);
         let e = decode(&png, None, "bomb.png", true, &g).unwrap_err();
         assert!(e.0.contains("this device's texture image holds"), "{}", e.0);
-        // With room for it, the decode starts and finds no rows.
+        // With room for it, its few bytes cannot hold 9000×9000 texels.
         let g = Guard::new("s.json".as_ref(), &LoadOptions::default());
         let e = decode(&png, None, "bomb.png", true, &g).unwrap_err();
-        assert!(e.0.contains("corrupt"), "{}", e.0);
+        assert!(e.0.contains("bytes cannot hold them"), "{}", e.0);
+        assert!(e.0.contains("9819 bytes at least"), "{}", e.0);
     }
 
     #[test]

@@ -1134,6 +1134,22 @@ fn a_jpeg_bomb_is_refused_from_its_header_by_the_device_limit() {
 }
 
 #[test]
+fn a_jpeg_too_small_for_its_header_is_refused_before_decoding() {
+    // 10000×10000 fits the device and the memory budget, but no JPEG of a
+    // few hundred bytes holds it (one bit per 8×8 block: 195 KB at least);
+    // decoded, the missing data would be filled in and rendered (2.6 GB).
+    texture_fails(
+        "short.jpg",
+        &jpeg_bomb(10000),
+        &[],
+        &[
+            "is 10000×10000 texels by its header, but its ",
+            "bytes cannot hold them (a JPEG codes at least a bit per 8×8 block: 195312 bytes at least); refused before decoding",
+        ],
+    );
+}
+
+#[test]
 fn a_texture_larger_than_a_side_is_refused_from_its_header() {
     texture_fails(
         "wide.jpg",
