@@ -186,12 +186,19 @@ impl Guard {
     }
 
     /// Admits a `width` × `height` texture, read from its image's header
-    /// before it is decoded, whose load and upload allocate `bytes`
+    /// before it is decoded, whose load and upload allocate `transient`
+    /// bytes for a while and `kept` bytes until the scene is uploaded
     /// ([`super::texture::texture_bytes`]): refused when its mip chain would
     /// take the scene's textures past the device's texture image
-    /// ([`LoadOptions::max_texture_bytes`]) or `bytes` the scene past the
-    /// memory budget.
-    pub fn charge_texture(&self, width: u32, height: u32, bytes: u64) -> Result<(), Refused> {
+    /// ([`LoadOptions::max_texture_bytes`]) or both would take the scene
+    /// past the memory budget; `kept` stays charged.
+    pub fn charge_texture(
+        &self,
+        width: u32,
+        height: u32,
+        transient: u64,
+        kept: u64,
+    ) -> Result<(), Refused> {
         let size = format!("is {width}×{height} texels by its header");
         let device = crate::scene::Texture::device_bytes_of(width, height)
             .next_multiple_of(crate::vulkan::TEXEL_BYTES as u64);
@@ -203,17 +210,18 @@ impl Guard {
                 mib(self.max_texture_bytes)
             )));
         }
-        let total = self.bytes.get().saturating_add(bytes);
-        if total > self.max_bytes {
+        let kept_total = self.bytes.get().saturating_add(kept);
+        let peak = kept_total.saturating_add(transient);
+        if peak > self.max_bytes {
             return Err(Refused(format!(
-                "{size}: decoding and uploading it would take the scene to {} ({total} bytes), more than the scene memory budget of {} ({} bytes, --max-scene-memory; refused before decoding)",
-                mib(total),
+                "{size}: decoding and uploading it would take the scene to {} ({peak} bytes), more than the scene memory budget of {} ({} bytes, --max-scene-memory; refused before decoding)",
+                mib(peak),
                 mib(self.max_bytes),
                 self.max_bytes
             )));
         }
         self.texture_bytes.set(textures);
-        self.bytes.set(total);
+        self.bytes.set(kept_total);
         Ok(())
     }
 

@@ -58,7 +58,8 @@ pub fn decode(
         )));
     }
     let decoded = decoder.total_bytes();
-    guard.charge_texture(width, height, texture_bytes(width, height, decoded))?;
+    let (transient, kept) = texture_bytes(width, height, decoded);
+    guard.charge_texture(width, height, transient, kept)?;
     check_holds(format, width, height, bytes.len())?;
     decoder
         .set_limits(limits(decoded.saturating_add(DECODER_SLACK)))
@@ -154,16 +155,19 @@ fn limits(max_alloc: u64) -> image::Limits {
 pub const UPLOAD_COPIES: u64 = 2;
 
 /// The bytes that loading and uploading a `width` × `height` texture
-/// allocate, given the decoder's output of `decoded` bytes: that output,
-/// the RGBA8 texels (the same buffer when the output is RGBA8 already) and
-/// the upload's [`UPLOAD_COPIES`] of its linear RGBA16 mip chain. For a
-/// 9000×9000 1-bit PNG that is 81 MB + 324 MB + 2 × 864 MB = 2.13 GB; such
-/// a render peaks at 2.16 GB on lavapipe (peak RSS, the whole process).
-pub fn texture_bytes(width: u32, height: u32, decoded: u64) -> u64 {
+/// allocate, given the decoder's output of `decoded` bytes, as `(transient,
+/// kept)`: the decoder's output is freed once it is converted to RGBA8
+/// (it is the RGBA8 buffer itself when the image is RGBA8 already), while
+/// the RGBA8 texels and the upload's [`UPLOAD_COPIES`] of the linear RGBA16
+/// mip chain are all held when the scene is uploaded. For a 9000×9000
+/// 1-bit PNG that is 81 MB + 324 MB + 2 × 864 MB = 2.13 GB at its peak;
+/// such a render peaks at 2.16 GB on lavapipe (peak RSS, the whole
+/// process).
+pub fn texture_bytes(width: u32, height: u32, decoded: u64) -> (u64, u64) {
     let rgba8 = u64::from(width) * u64::from(height) * 4;
-    let conversion = if decoded == rgba8 { 0 } else { rgba8 };
+    let transient = if decoded == rgba8 { 0 } else { decoded };
     let upload = Texture::device_bytes_of(width, height).saturating_mul(UPLOAD_COPIES);
-    decoded.saturating_add(conversion).saturating_add(upload)
+    (transient, rgba8.saturating_add(upload))
 }
 
 /// The image's texels as RGBA8, reusing its buffer when it is RGBA8.
@@ -209,11 +213,13 @@ mod tests {
             .unwrap();
         let t = decode(&png, None, "g.png", false, &g).unwrap();
         assert_eq!(t.texels, [0, 10, 20, 1, 11, 21].map(|v| [v, v, v, 255]));
-        // The decode, the RGBA8 copy and the upload's copies of the RGBA16 chain.
+        // The decode passes; the RGBA8 texels and the upload's copies of
+        // the RGBA16 chain stay charged.
         let device = Texture::device_bytes_of(3, 2);
-        assert_eq!(g.bytes(), 6 + 24 + UPLOAD_COPIES * device);
+        assert_eq!(texture_bytes(3, 2, 6), (6, 24 + UPLOAD_COPIES * device));
+        assert_eq!(g.bytes(), 24 + UPLOAD_COPIES * device);
         // RGBA8 already: decoded into the texels' own buffer, charged once.
-        assert_eq!(texture_bytes(3, 2, 24), 24 + UPLOAD_COPIES * device);
+        assert_eq!(texture_bytes(3, 2, 24), (0, 24 + UPLOAD_COPIES * device));
     }
 
     #[test]
