@@ -630,6 +630,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let mut load_options = limits.load_options(width, height);
     if let Some(r) = &renderer {
         load_options.max_triangles = r.max_triangles();
+        load_options.max_texture_bytes = r.texture_capacity();
     }
     let t0 = Instant::now();
     let loaded = loaders::load_scene(&scene, &load_options)?;

@@ -138,6 +138,7 @@ pub fn render_entry(
 ) -> anyhow::Result<()> {
     let mut load = settings.load.clone();
     load.max_triangles = renderer.max_triangles();
+    load.max_texture_bytes = renderer.texture_capacity();
     let loaded = loaders::load_scene(&entry.scene, &load)?;
     let mut scene = loaded.scene;
     if let Some(n) = settings.area_samples {

@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use super::part::{self, PartInfo};
+use super::split::Passes;
 use crate::output::Format;
 
 /// A checked set of parts: for each tile, its parts in pass order.
@@ -31,12 +32,51 @@ pub struct Plan {
     pub tiles: Vec<Vec<(PathBuf, PartInfo)>>,
 }
 
+/// Most parts one problem names; the rest are counted.
+pub const MAX_NAMED_PARTS: usize = 5;
+
+/// Most problems the error lists; the rest are counted.
+pub const MAX_PROBLEMS: usize = 10;
+
+/// The first [`MAX_NAMED_PARTS`] of `paths` by name, then how many more:
+/// a problem's line stays short however many parts share it.
 fn names(paths: &[&PathBuf]) -> String {
-    paths
+    let mut listed = paths
         .iter()
+        .take(MAX_NAMED_PARTS)
         .map(|p| p.display().to_string())
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(", ");
+    if paths.len() > MAX_NAMED_PARTS {
+        listed += &format!(" and {} more", paths.len() - MAX_NAMED_PARTS);
+    }
+    listed
+}
+
+/// Fails with the first [`MAX_PROBLEMS`] of `problems` on one line, then
+/// how many more there are; succeeds when there are none.
+fn refuse(problems: &[String]) -> anyhow::Result<()> {
+    if problems.is_empty() {
+        return Ok(());
+    }
+    let mut line = problems[..problems.len().min(MAX_PROBLEMS)].join("; ");
+    if problems.len() > MAX_PROBLEMS {
+        line += &format!("; and {} more problems", problems.len() - MAX_PROBLEMS);
+    }
+    anyhow::bail!("{line}")
+}
+
+/// The paths given more than once, each named once with its count.
+fn given_twice(paths: &[PathBuf]) -> Vec<String> {
+    let mut counts: BTreeMap<&PathBuf, usize> = BTreeMap::new();
+    for p in paths {
+        *counts.entry(p).or_default() += 1;
+    }
+    counts
+        .into_iter()
+        .filter(|&(_, n)| n > 1)
+        .map(|(p, n)| format!("{}: given {n} times; give each part once", p.display()))
+        .collect()
 }
 
 /// Reads the parts' headers and checks that they make up one whole render.
@@ -44,7 +84,8 @@ fn names(paths: &[&PathBuf]) -> String {
 /// (or the missing tiles and passes).
 pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
     anyhow::ensure!(!paths.is_empty(), "merge: no part files given");
-    let mut problems = Vec::new();
+    let mut problems = given_twice(paths);
+    refuse(&problems)?;
     let mut infos = Vec::new();
     for p in paths {
         match part::read_info(p) {
@@ -52,9 +93,7 @@ pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
             Err(e) => problems.push(e.to_string()),
         }
     }
-    if !problems.is_empty() {
-        anyhow::bail!("{}", problems.join("; "));
-    }
+    refuse(&problems)?;
     // Everything is compared with the first part.
     let (first_path, first) = infos[0].clone();
     let mut others: BTreeMap<String, Vec<&PathBuf>> = BTreeMap::new();
@@ -94,9 +133,7 @@ pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
     for (what, ps) in &others {
         problems.push(format!("{}: {what}", names(ps)));
     }
-    if !problems.is_empty() {
-        anyhow::bail!("{}", problems.join("; "));
-    }
+    refuse(&problems)?;
     let n = first.tile.count;
     let mut tiles: Vec<Vec<(PathBuf, PartInfo)>> = vec![Vec::new(); n as usize];
     for (p, i) in infos {
@@ -108,7 +145,12 @@ pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
             problems.push(format!("tile {t}/{n}: missing"));
             continue;
         }
+        // `next`: the first pass not yet covered, by `cover` (the part
+        // that reaches furthest so far). Parts that repeat passes are
+        // grouped by what they repeat, so each is named once.
         let mut next = 0;
+        let mut cover = 0;
+        let mut repeats: BTreeMap<(usize, Passes), Vec<&PathBuf>> = BTreeMap::new();
         for (k, (p, i)) in parts.iter().enumerate() {
             if i.passes.start > next {
                 problems.push(format!(
@@ -116,19 +158,19 @@ pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
                     i.passes.start
                 ));
             } else if i.passes.start < next {
-                let earlier: Vec<&PathBuf> = parts[..k]
-                    .iter()
-                    .filter(|(_, o)| o.passes.end > i.passes.start)
-                    .map(|(q, _)| q)
-                    .collect();
-                problems.push(format!(
-                    "tile {t}/{n}: {} (passes {}) repeats passes already in {}",
-                    p.display(),
-                    i.passes,
-                    names(&earlier)
-                ));
+                repeats.entry((cover, i.passes)).or_default().push(p);
             }
-            next = next.max(i.passes.end);
+            if i.passes.end > next {
+                (next, cover) = (i.passes.end, k);
+            }
+        }
+        for ((cover, passes), ps) in &repeats {
+            let verb = if ps.len() == 1 { "repeats" } else { "repeat" };
+            problems.push(format!(
+                "tile {t}/{n}: {} (passes {passes}) {verb} passes already in {}",
+                names(ps),
+                parts[*cover].0.display()
+            ));
         }
         if next < first.spp {
             problems.push(format!(
@@ -137,9 +179,7 @@ pub fn plan(paths: &[PathBuf]) -> anyhow::Result<Plan> {
             ));
         }
     }
-    if !problems.is_empty() {
-        anyhow::bail!("{}", problems.join("; "));
-    }
+    refuse(&problems)?;
     Ok(Plan {
         width: first.width,
         height: first.height,

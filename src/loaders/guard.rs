@@ -44,8 +44,11 @@ pub struct Guard {
     root: Option<PathBuf>,
     max_bytes: u64,
     max_triangles: u64,
+    max_texture_bytes: u64,
     bytes: Cell<u64>,
     triangles: Cell<u64>,
+    /// Device bytes of the textures admitted so far.
+    texture_bytes: Cell<u64>,
 }
 
 /// Why a file could not be read or a primitive not be admitted; the caller
@@ -67,8 +70,10 @@ impl Guard {
             root,
             max_bytes: opts.max_scene_bytes,
             max_triangles: opts.max_triangles,
+            max_texture_bytes: opts.max_texture_bytes,
             bytes: Cell::new(0),
             triangles: Cell::new(0),
+            texture_bytes: Cell::new(0),
         }
     }
 
@@ -177,6 +182,46 @@ impl Guard {
             )));
         }
         self.bytes.set(total);
+        Ok(())
+    }
+
+    /// Admits a `width` × `height` texture, read from its image's header
+    /// before it is decoded, whose load and upload allocate `transient`
+    /// bytes for a while and `kept` bytes until the scene is uploaded
+    /// ([`super::texture::texture_bytes`]): refused when its mip chain would
+    /// take the scene's textures past the device's texture image
+    /// ([`LoadOptions::max_texture_bytes`]) or both would take the scene
+    /// past the memory budget; `kept` stays charged.
+    pub fn charge_texture(
+        &self,
+        width: u32,
+        height: u32,
+        transient: u64,
+        kept: u64,
+    ) -> Result<(), Refused> {
+        let size = format!("is {width}×{height} texels by its header");
+        let device = crate::scene::Texture::device_bytes_of(width, height)
+            .next_multiple_of(crate::vulkan::TEXEL_BYTES as u64);
+        let textures = self.texture_bytes.get().saturating_add(device);
+        if textures > self.max_texture_bytes {
+            return Err(Refused(format!(
+                "{size}: with their mip-maps the scene's textures would need {} up to this one, more than the {} this device's texture image holds (refused before decoding)",
+                mib(textures),
+                mib(self.max_texture_bytes)
+            )));
+        }
+        let kept_total = self.bytes.get().saturating_add(kept);
+        let peak = kept_total.saturating_add(transient);
+        if peak > self.max_bytes {
+            return Err(Refused(format!(
+                "{size}: decoding and uploading it would take the scene to {} ({peak} bytes), more than the scene memory budget of {} ({} bytes, --max-scene-memory; refused before decoding)",
+                mib(peak),
+                mib(self.max_bytes),
+                self.max_bytes
+            )));
+        }
+        self.texture_bytes.set(textures);
+        self.bytes.set(kept_total);
         Ok(())
     }
 

@@ -27,6 +27,10 @@ pub struct LoadOptions {
     pub max_scene_bytes: u64,
     /// Most triangles in the scene: the device's limit when a renderer is known.
     pub max_triangles: u64,
+    /// Most bytes the scene's textures may take on the device with their
+    /// mip chains (the renderer's texture image), checked from each image's
+    /// header before it is decoded; `u64::MAX` when no device is known.
+    pub max_texture_bytes: u64,
 }
 
 impl Default for LoadOptions {
@@ -37,6 +41,7 @@ impl Default for LoadOptions {
             restrict_paths: false,
             max_scene_bytes: guard::DEFAULT_MAX_SCENE_BYTES,
             max_triangles: guard::DEFAULT_MAX_TRIANGLES,
+            max_texture_bytes: u64::MAX,
         }
     }
 }

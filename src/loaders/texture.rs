@@ -1,12 +1,19 @@
 //! Texture images: PNG or JPEG bytes (a file, a glTF bufferView or a
 //! `data:` URI) decoded with the `image` crate into a [`Texture`].
 //!
-//! Decoding is bounded before it allocates: the header's size is checked
-//! against [`MAX_TEXTURE_SIDE`] and the scene's memory budget ([`Guard`]),
-//! so a small file that claims a huge image fails with a message instead of
-//! exhausting memory.
+//! Decoding is bounded before it allocates: the decoder reads the header
+//! alone first, and its size is checked against [`MAX_TEXTURE_SIDE`], the
+//! device's texture image and the scene's memory budget ([`Guard`]) before
+//! a texel is decoded, so a small file that claims a huge image (a
+//! "texture bomb") is refused from its header with a message instead of
+//! exhausting memory. What is charged is what the load and the upload
+//! really allocate ([`texture_bytes`]), and the decoded image becomes the
+//! texture's RGBA8 texels in place when it is RGBA8 already, so that no two
+//! full-size copies are held at once otherwise.
 
 use std::io::Cursor;
+
+use image::{ImageDecoder, ImageFormat};
 
 use super::guard::{Guard, Refused};
 use crate::scene::Texture;
@@ -16,10 +23,15 @@ use crate::scene::Texture;
 /// again when the scene is uploaded).
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
+/// Bytes the decoder itself may allocate beyond its output (row buffers,
+/// JPEG component planes are within the output's size).
+const DECODER_SLACK: u64 = 16 << 20;
+
 /// Decodes `bytes` (PNG or JPEG; `mime` is the file's declared type, if
 /// any, and must agree with the bytes) into an RGBA8 texture called `label`.
-/// `srgb` marks a colour texture. The texels are charged to `guard`'s
-/// memory budget.
+/// `srgb` marks a colour texture. The header is read and checked first
+/// ([`Guard::charge_texture`]): an image that cannot fit the device or the
+/// memory budget is refused before it is decoded.
 pub fn decode(
     bytes: &[u8],
     mime: Option<&str>,
@@ -27,17 +39,53 @@ pub fn decode(
     srgb: bool,
     guard: &Guard,
 ) -> Result<Texture, Refused> {
-    let reader = image::ImageReader::new(Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| Refused(format!("cannot read the image: {e}")))?;
-    let format = match reader.format() {
-        Some(f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg)) => f,
-        Some(other) => {
+    let format = format_of(bytes, mime)?;
+    let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
+    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), format);
+    // Reading the header may allocate little; its size is checked here,
+    // with the size in the message, before the decode's limits are set.
+    let mut header = image::Limits::default();
+    header.max_alloc = Some(DECODER_SLACK);
+    reader.limits(header);
+    let mut decoder = reader.into_decoder().map_err(corrupt)?;
+    let (width, height) = decoder.dimensions();
+    if width == 0 || height == 0 {
+        return Err(Refused(format!("is an empty image ({width}×{height})")));
+    }
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(Refused(format!(
+            "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
+        )));
+    }
+    let decoded = decoder.total_bytes();
+    let (transient, kept) = texture_bytes(width, height, decoded);
+    guard.charge_texture(width, height, transient, kept)?;
+    check_holds(format, width, height, bytes.len())?;
+    decoder
+        .set_limits(limits(decoded.saturating_add(DECODER_SLACK)))
+        .map_err(corrupt)?;
+    let image = image::DynamicImage::from_decoder(decoder).map_err(corrupt)?;
+    Ok(Texture {
+        label: label.to_string(),
+        file: None,
+        width,
+        height,
+        texels: rgba_texels(image),
+        srgb,
+    })
+}
+
+/// The image format of `bytes`, which must be PNG or JPEG and agree with
+/// the declared `mime` type when there is one.
+fn format_of(bytes: &[u8], mime: Option<&str>) -> Result<ImageFormat, Refused> {
+    let format = match image::guess_format(bytes) {
+        Ok(f @ (ImageFormat::Png | ImageFormat::Jpeg)) => f,
+        Ok(other) => {
             return Err(Refused(format!(
                 "is a {other:?} image; textures must be PNG or JPEG"
             )))
         }
-        None => {
+        Err(_) => {
             return Err(Refused(
                 "is not a PNG or JPEG image (unknown format)".into(),
             ))
@@ -45,8 +93,8 @@ pub fn decode(
     };
     if let Some(m) = mime {
         let declared = match m {
-            "image/png" => Some(image::ImageFormat::Png),
-            "image/jpeg" => Some(image::ImageFormat::Jpeg),
+            "image/png" => Some(ImageFormat::Png),
+            "image/jpeg" => Some(ImageFormat::Jpeg),
             _ => None,
         };
         if declared != Some(format) {
@@ -55,38 +103,82 @@ pub fn decode(
             )));
         }
     }
-    let (width, height) = reader
-        .into_dimensions()
-        .map_err(|e| Refused(format!("is a corrupt {format:?} image: {e}")))?;
-    if width == 0 || height == 0 {
-        return Err(Refused(format!("is an empty image ({width}×{height})")));
-    }
-    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+    Ok(format)
+}
+
+/// The most a zlib stream (PNG's image data) expands: 258 bytes from a
+/// match of two one-bit codes.
+const DEFLATE_MAX_RATIO: u64 = 1032;
+
+/// Refuses a `width` × `height` image whose file of `len` bytes is too
+/// small to hold it whatever its content, before it is decoded: a PNG's
+/// rows hold at least one bit a texel and a filter byte a row, which
+/// zlib shrinks at most [`DEFLATE_MAX_RATIO`] times; a JPEG codes at
+/// least one bit per 8×8 block of its largest component (the DC
+/// difference, in every scan that holds it). A small file that claims a
+/// large image is truncated, and decoders fill what is missing, so it
+/// would otherwise be decoded, uploaded and rendered at full size.
+fn check_holds(format: ImageFormat, width: u32, height: u32, len: usize) -> Result<(), Refused> {
+    let (w, h) = (u64::from(width), u64::from(height));
+    let (least, why) = match format {
+        ImageFormat::Png => (
+            h * (1 + w.div_ceil(8)) / DEFLATE_MAX_RATIO,
+            "a PNG holds at least a bit a texel, compressed at most 1032 times",
+        ),
+        _ => (
+            w.div_ceil(8) * h.div_ceil(8) / 8,
+            "a JPEG codes at least a bit per 8×8 block",
+        ),
+    };
+    if (len as u64) < least {
         return Err(Refused(format!(
-            "is {width}×{height} texels, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes"
+            "is {width}×{height} texels by its header, but its {len} bytes cannot hold them ({why}: {least} bytes at least); refused before decoding"
         )));
     }
-    // RGBA8 and the mip chain (at most 4/3 more).
-    let bytes_needed = u64::from(width) * u64::from(height) * 4 * 4 / 3;
-    guard.charge_bytes(bytes_needed)?;
-    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), format);
+    Ok(())
+}
+
+/// Decoder limits: [`MAX_TEXTURE_SIDE`] a side and `max_alloc` bytes.
+fn limits(max_alloc: u64) -> image::Limits {
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIDE);
     limits.max_image_height = Some(MAX_TEXTURE_SIDE);
-    limits.max_alloc = Some(bytes_needed.saturating_mul(4).max(1 << 20));
-    reader.limits(limits);
-    let image = reader
-        .decode()
-        .map_err(|e| Refused(format!("is a corrupt {format:?} image: {e}")))?;
-    let rgba = image.to_rgba8();
-    let texels = rgba.pixels().map(|p| p.0).collect();
-    Ok(Texture {
-        label: label.to_string(),
-        file: None,
-        width,
-        height,
-        texels,
-        srgb,
+    limits.max_alloc = Some(max_alloc);
+    limits
+}
+
+/// Copies of a texture's device-format mip chain ([`Texture::device_bytes`])
+/// that an upload holds at once: the packed words
+/// (`render::layout::textures`) and the texel image itself, which on a CPU
+/// device such as lavapipe is host memory too (the staging buffer between
+/// them holds one band of at most 64 MiB, `vulkan::MAX_KEPT_STAGING`).
+pub const UPLOAD_COPIES: u64 = 2;
+
+/// The bytes that loading and uploading a `width` × `height` texture
+/// allocate, given the decoder's output of `decoded` bytes, as `(transient,
+/// kept)`: the decoder's output is freed once it is converted to RGBA8
+/// (it is the RGBA8 buffer itself when the image is RGBA8 already), while
+/// the RGBA8 texels and the upload's [`UPLOAD_COPIES`] of the linear RGBA16
+/// mip chain are all held when the scene is uploaded. For a 9000×9000
+/// 1-bit PNG that is 81 MB + 324 MB + 2 × 864 MB = 2.13 GB at its peak;
+/// such a render peaks at 2.16 GB on lavapipe (peak RSS, the whole
+/// process).
+pub fn texture_bytes(width: u32, height: u32, decoded: u64) -> (u64, u64) {
+    let rgba8 = u64::from(width) * u64::from(height) * 4;
+    let transient = if decoded == rgba8 { 0 } else { decoded };
+    let upload = Texture::device_bytes_of(width, height).saturating_mul(UPLOAD_COPIES);
+    (transient, rgba8.saturating_add(upload))
+}
+
+/// The image's texels as RGBA8, reusing its buffer when it is RGBA8.
+fn rgba_texels(image: image::DynamicImage) -> Vec<[u8; 4]> {
+    let raw = image.into_rgba8().into_raw();
+    // `[u8; 4]` has the alignment of `u8` and the length is a multiple of
+    // four, so the buffer is reused as it is.
+    bytemuck::allocation::try_cast_vec(raw).unwrap_or_else(|(_, raw)| {
+        raw.chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect()
     })
 }
 
@@ -110,6 +202,59 @@ mod tests {
         assert_eq!((t.width, t.height), (3, 2));
         assert_eq!(t.texels[0], [0, 0, 7, 255]);
         assert_eq!(t.texels[5], [2, 1, 7, 255]);
+    }
+
+    #[test]
+    fn converts_grey_and_rgba_to_rgba8() {
+        let g = Guard::new("s.json".as_ref(), &LoadOptions::default());
+        let grey = image::GrayImage::from_fn(3, 2, |x, y| image::Luma([(10 * x + y) as u8]));
+        let mut png = Vec::new();
+        grey.write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let t = decode(&png, None, "g.png", false, &g).unwrap();
+        assert_eq!(t.texels, [0, 10, 20, 1, 11, 21].map(|v| [v, v, v, 255]));
+        // The decode passes; the RGBA8 texels and the upload's copies of
+        // the RGBA16 chain stay charged.
+        let device = Texture::device_bytes_of(3, 2);
+        assert_eq!(texture_bytes(3, 2, 6), (6, 24 + UPLOAD_COPIES * device));
+        assert_eq!(g.bytes(), 24 + UPLOAD_COPIES * device);
+        // RGBA8 already: decoded into the texels' own buffer, charged once.
+        assert_eq!(texture_bytes(3, 2, 24), (0, 24 + UPLOAD_COPIES * device));
+    }
+
+    #[test]
+    fn a_bomb_is_refused_from_its_header() {
+        // A 9000×9000 grey PNG header on no image data: the size alone is
+        // refused, so the missing rows are never read.
+        let header = image::GrayImage::new(1, 1);
+        let mut png = Vec::new();
+        header
+            .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        png[16..24].copy_from_slice(&[0, 0, 0x23, 0x28, 0, 0, 0x23, 0x28]);
+        let crc = crc32fast::hash(&png[12..29]);
+        png[29..33].copy_from_slice(&crc.to_be_bytes());
+        let opts = LoadOptions {
+            max_scene_bytes: 1 << 30,
+            ..Default::default()
+        };
+        let g = Guard::new("s.json".as_ref(), &opts);
+        let e = decode(&png, None, "bomb.png", true, &g).unwrap_err();
+        assert!(e.0.contains("is 9000×9000 texels by its header"), "{}", e.0);
+        assert!(e.0.contains("refused before decoding"), "{}", e.0);
+        // The device's texture image refuses it too, whatever the budget.
+        let opts = LoadOptions {
+            max_texture_bytes: 512 << 20,
+            ..Default::default()
+        };
+        let g = Guard::new("s.json".as_ref(), &opts);
+        let e = decode(&png, None, "bomb.png", true, &g).unwrap_err();
+        assert!(e.0.contains("this device's texture image holds"), "{}", e.0);
+        // With room for it, its few bytes cannot hold 9000×9000 texels.
+        let g = Guard::new("s.json".as_ref(), &LoadOptions::default());
+        let e = decode(&png, None, "bomb.png", true, &g).unwrap_err();
+        assert!(e.0.contains("bytes cannot hold them"), "{}", e.0);
+        assert!(e.0.contains("9819 bytes at least"), "{}", e.0);
     }
 
     #[test]

@@ -686,6 +686,20 @@ impl Renderer {
         in_image.min(in_buffer)
     }
 
+    /// The most bytes the scene's textures may take with their mip chains
+    /// on this device: one texel image of `maxImageDimension2D` rows of
+    /// [`crate::vulkan::TEXEL_ROW`] texels, within its largest allocation
+    /// (and [`Renderer::set_texture_capacity`]). Loaders check each image's
+    /// header against it before decoding (`LoadOptions::max_texture_bytes`).
+    pub fn texture_capacity(&self) -> u64 {
+        let limits = self.context.limits();
+        (u64::from(crate::vulkan::TEXEL_ROW)
+            * u64::from(limits.max_image_dimension_2d)
+            * crate::vulkan::TEXEL_BYTES as u64)
+            .min(limits.max_memory_allocation_size)
+            .min(self.texture_capacity)
+    }
+
     /// The kernel variant in use.
     pub fn kernel(&self) -> KernelOptions {
         self.kernel
@@ -946,11 +960,7 @@ impl Renderer {
     /// first texture that does not fit.
     fn check_textures(&self, scene: &Scene) -> Result<(), RenderError> {
         let limits = self.context.limits();
-        let capacity = (u64::from(crate::vulkan::TEXEL_ROW)
-            * u64::from(limits.max_image_dimension_2d)
-            * crate::vulkan::TEXEL_BYTES as u64)
-            .min(limits.max_memory_allocation_size)
-            .min(self.texture_capacity);
+        let capacity = self.texture_capacity();
         let mut total = 0u64;
         for (i, t) in scene.textures.iter().enumerate() {
             total += t

@@ -154,56 +154,86 @@ impl Texture {
     /// The mip chain, level 0 first, down to 1×1 (module docs: how each
     /// level is made).
     pub fn mip_chain(&self) -> Vec<MipLevel> {
-        let mut levels = vec![MipLevel {
-            width: self.width,
-            height: self.height,
-            texels: self.texels.clone(),
-        }];
+        let mut levels = Vec::new();
+        self.for_each_mip_level(|width, height, texels| {
+            levels.push(MipLevel {
+                width,
+                height,
+                texels: texels.to_vec(),
+            })
+        });
+        levels
+    }
+
+    /// Calls `f(width, height, texels)` with each level of
+    /// [`Texture::mip_chain`] in turn, holding only the level before it:
+    /// level 0 is the texture's own texels, not a copy, so that a large
+    /// texture is not held twice while it is uploaded.
+    pub fn for_each_mip_level(&self, mut f: impl FnMut(u32, u32, &[[u8; 4]])) {
+        f(self.width, self.height, &self.texels);
+        let mut prev: Option<MipLevel> = None;
         loop {
-            let prev = levels.last().expect("level 0");
-            if prev.width == 1 && prev.height == 1 {
+            let (width, height, texels) = match &prev {
+                Some(p) => (p.width, p.height, &p.texels[..]),
+                None => (self.width, self.height, &self.texels[..]),
+            };
+            if width == 1 && height == 1 {
                 break;
             }
-            let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
-            let mut texels = Vec::with_capacity((w * h) as usize);
-            for y in 0..h {
-                for x in 0..w {
-                    let mut sum = [0.0f64; 4];
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let sx = (2 * x + dx).min(prev.width - 1);
-                        let sy = (2 * y + dy).min(prev.height - 1);
-                        let t = prev.texels[(sy * prev.width + sx) as usize];
-                        for (c, s) in sum.iter_mut().enumerate() {
-                            *s += if self.srgb && c < 3 {
-                                srgb_to_linear(t[c])
-                            } else {
-                                f64::from(t[c]) / 255.0
-                            };
-                        }
-                    }
-                    texels.push(std::array::from_fn(|c| {
-                        let mean = sum[c] / 4.0;
-                        if self.srgb && c < 3 {
-                            linear_to_srgb8(mean)
-                        } else {
-                            (mean * 255.0).round() as u8
-                        }
-                    }));
-                }
-            }
-            levels.push(MipLevel {
-                width: w,
-                height: h,
-                texels,
-            });
+            let next = self.half(width, height, texels);
+            f(next.width, next.height, &next.texels);
+            prev = Some(next);
         }
-        levels
+    }
+
+    /// The level after a `width` × `height` level of `texels`: each texel
+    /// the mean of the four under it (edges clamped), in linear light for
+    /// the colour channels of an sRGB texture.
+    fn half(&self, width: u32, height: u32, texels: &[[u8; 4]]) -> MipLevel {
+        let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+        let mut out = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0.0f64; 4];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let sx = (2 * x + dx).min(width - 1);
+                    let sy = (2 * y + dy).min(height - 1);
+                    let t = texels[(sy * width + sx) as usize];
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += if self.srgb && c < 3 {
+                            srgb_to_linear(t[c])
+                        } else {
+                            f64::from(t[c]) / 255.0
+                        };
+                    }
+                }
+                out.push(std::array::from_fn(|c| {
+                    let mean = sum[c] / 4.0;
+                    if self.srgb && c < 3 {
+                        linear_to_srgb8(mean)
+                    } else {
+                        (mean * 255.0).round() as u8
+                    }
+                }));
+            }
+        }
+        MipLevel {
+            width: w,
+            height: h,
+            texels: out,
+        }
     }
 
     /// Bytes of the texture with its whole mip chain on the device (8 a
     /// texel: the GPU stores linear RGBA16, `render::layout::textures`).
     pub fn device_bytes(&self) -> u64 {
-        let (mut w, mut h, mut n) = (u64::from(self.width), u64::from(self.height), 0);
+        Texture::device_bytes_of(self.width, self.height)
+    }
+
+    /// [`Texture::device_bytes`] of a `width` × `height` texture, known
+    /// from an image's header before it is decoded.
+    pub fn device_bytes_of(width: u32, height: u32) -> u64 {
+        let (mut w, mut h, mut n) = (u64::from(width), u64::from(height), 0);
         loop {
             n += w * h;
             if w == 1 && h == 1 {

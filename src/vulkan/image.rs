@@ -10,7 +10,7 @@
 //! (`texture_2d`) computes a mip level for each lane, which took most of the gain away.
 //! GPUs read such images through their texture path, long-standing practice for BVH data.
 
-use super::buffer::Buffer;
+use super::buffer::{Buffer, MAX_KEPT_STAGING};
 use super::context::{Context, DeviceShared};
 use super::{vk_err, VulkanError};
 use ash::vk;
@@ -182,7 +182,6 @@ impl Context {
                 self.texel_format_features
             )));
         }
-        let bytes = height as u64 * TEXEL_ROW as u64 * TEXEL_BYTES as u64;
         let device = &self.shared.device;
         let format = vk::Format::R32G32B32A32_UINT;
         let info = vk::ImageCreateInfo::default()
@@ -294,7 +293,26 @@ impl Context {
             return Ok(result);
         };
         // Images in optimal tiling cannot be mapped: upload through a staging buffer.
-        let staging = self.upload_buffer(label, bytes, data)?;
+        self.upload_rows(image, range, label, height, data)?;
+        Ok(result)
+    }
+
+    /// Fills `image` (`height` rows of [`TEXEL_ROW`] texels, still in the
+    /// `UNDEFINED` layout) with `data` (the rest zero) and leaves it in
+    /// `GENERAL` for the shaders. The rows go through a staging buffer of
+    /// at most [`MAX_KEPT_STAGING`] bytes, one band at a time, so that a
+    /// large image (a scene's textures, up to a gigabyte) is not held a
+    /// second time in host memory while it is uploaded.
+    fn upload_rows(
+        &self,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        label: &str,
+        height: u32,
+        data: &[u8],
+    ) -> Result<(), VulkanError> {
+        use vk::PipelineStageFlags as S;
+        let flags = vk::DependencyFlags::empty();
         let to_transfer = vk::ImageMemoryBarrier::default()
             .old_layout(vk::ImageLayout::UNDEFINED)
             .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
@@ -303,54 +321,68 @@ impl Context {
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(image)
             .subresource_range(range);
-        let to_shader = to_transfer
+        let between = to_transfer
             .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+        let to_shader = between
             .new_layout(vk::ImageLayout::GENERAL)
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
             .dst_access_mask(vk::AccessFlags::SHADER_READ);
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(1),
-            )
-            .image_extent(vk::Extent3D {
-                width: TEXEL_ROW,
-                height,
-                depth: 1,
-            });
-        use vk::PipelineStageFlags as S;
-        let flags = vk::DependencyFlags::empty();
-        // SAFETY: the image, its memory and the staging buffer are valid and idle.
-        self.submit(|device, cmd| unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                S::TOP_OF_PIPE,
-                S::TRANSFER,
-                flags,
-                &[],
-                &[],
-                &[to_transfer],
-            );
-            device.cmd_copy_buffer_to_image(
-                cmd,
-                staging.handle,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            );
-            device.cmd_pipeline_barrier(
-                cmd,
-                S::TRANSFER,
-                S::COMPUTE_SHADER,
-                flags,
-                &[],
-                &[],
-                &[to_shader],
-            );
-        })?;
-        self.keep_staging(staging);
-        Ok(result)
+        let row_bytes = TEXEL_ROW as u64 * TEXEL_BYTES as u64;
+        let band = (MAX_KEPT_STAGING / row_bytes).clamp(1, u64::from(height)) as u32;
+        let mut y = 0;
+        while y < height {
+            let rows = band.min(height - y);
+            let start = (u64::from(y) * row_bytes).min(data.len() as u64) as usize;
+            let end = (u64::from(y + rows) * row_bytes).min(data.len() as u64) as usize;
+            let bytes = u64::from(rows) * row_bytes;
+            let staging = self.upload_buffer(label, bytes, &data[start..end])?;
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .layer_count(1),
+                )
+                .image_offset(vk::Offset3D {
+                    x: 0,
+                    y: y as i32,
+                    z: 0,
+                })
+                .image_extent(vk::Extent3D {
+                    width: TEXEL_ROW,
+                    height: rows,
+                    depth: 1,
+                });
+            let (first, last) = (y == 0, y + rows == height);
+            // SAFETY: the image, its memory and the staging buffer are valid and idle.
+            self.submit(|device, cmd| unsafe {
+                if first {
+                    device.cmd_pipeline_barrier(
+                        cmd,
+                        S::TOP_OF_PIPE,
+                        S::TRANSFER,
+                        flags,
+                        &[],
+                        &[],
+                        &[to_transfer],
+                    );
+                }
+                device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.handle,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                );
+                let (next, barrier) = match last {
+                    true => (S::COMPUTE_SHADER, to_shader),
+                    false => (S::TRANSFER, between),
+                };
+                device.cmd_pipeline_barrier(cmd, S::TRANSFER, next, flags, &[], &[], &[barrier]);
+            })?;
+            self.keep_staging(staging);
+            y += rows;
+        }
+        Ok(())
     }
 
     /// Overwrites texels `first..first + data.len() / TEXEL_BYTES` of `image` with `data`

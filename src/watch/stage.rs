@@ -132,7 +132,9 @@ pub struct Session {
 
 impl Session {
     /// A session on an open renderer; nothing is loaded yet.
-    pub fn new(renderer: Renderer, scene_path: &Path, load: LoadOptions) -> Session {
+    pub fn new(renderer: Renderer, scene_path: &Path, mut load: LoadOptions) -> Session {
+        // Images that cannot fit the device are refused from their headers.
+        load.max_texture_bytes = renderer.texture_capacity();
         Session {
             renderer,
             scene_path: scene_path.to_path_buf(),

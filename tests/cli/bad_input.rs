@@ -1033,3 +1033,246 @@ fn reference_refuses_a_wgsl_shader() {
         ],
     );
 }
+
+// ------------------------------------------- untrusted files (issue 36, C)
+
+/// A PNG of `side`×`side` 1-bit grey texels, all black: a few KB that
+/// claim `side`² texels.
+fn png_bomb(side: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, side, side);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::One);
+    encoder.set_compression(png::Compression::Fast);
+    let mut writer = encoder.write_header().unwrap();
+    let mut stream = writer.stream_writer().unwrap();
+    let row = vec![0u8; side.div_ceil(8) as usize];
+    for _ in 0..side {
+        std::io::Write::write_all(&mut stream, &row).unwrap();
+    }
+    stream.finish().unwrap();
+    writer.finish().unwrap();
+    out
+}
+
+/// A valid 16×16 JPEG whose frame header (SOF0) is patched to claim
+/// `side`×`side` texels.
+fn jpeg_bomb(side: u16) -> Vec<u8> {
+    let img = image::RgbImage::from_pixel(16, 16, image::Rgb([120, 90, 60]));
+    let mut jpeg = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut jpeg),
+        image::ImageFormat::Jpeg,
+    )
+    .unwrap();
+    // Markers from after SOI: FF xx, then a big-endian length.
+    let mut i = 2;
+    while jpeg[i + 1] != 0xC0 {
+        i += 2 + usize::from(u16::from_be_bytes([jpeg[i + 2], jpeg[i + 3]]));
+    }
+    // SOF0: length (2), precision (1), height (2), width (2).
+    jpeg[i + 5..i + 7].copy_from_slice(&side.to_be_bytes());
+    jpeg[i + 7..i + 9].copy_from_slice(&side.to_be_bytes());
+    jpeg
+}
+
+/// Renders the base scene with `image` (named `name`) as the red shader's
+/// diffuse texture and `extra` arguments; asserts a clean failure naming
+/// the scene, the texture's field, the image and every string of `must`.
+#[track_caller]
+fn texture_fails(name: &str, image: &[u8], extra: &[&str], must: &[&str]) -> String {
+    let scene = scene_file(
+        "scene.json",
+        mutated(|v| v["shaders"]["red"]["diffuse"] = json!({"texture": name})),
+    );
+    std::fs::write(scene.path.with_file_name(name), image).unwrap();
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene.path, out_dir.path(), extra), &[]);
+    let path = scene.path.display().to_string();
+    let mut all = vec![path.as_str(), ": shaders.red.diffuse.texture: ", name];
+    all.extend_from_slice(must);
+    assert_fails(&out, out_dir.path(), &[], Shape::OneLine, &all)
+}
+
+#[test]
+fn a_png_bomb_is_refused_from_its_header() {
+    // 9000×9000 texels in about 10 KB. Decoding it and uploading its mip
+    // chain takes about 2.1 GB (src/loaders/texture.rs, texture_bytes): a
+    // 1 GiB budget refuses it from the header, before a row is inflated.
+    let bomb = png_bomb(9000);
+    assert!(bomb.len() < 100_000, "{} bytes", bomb.len());
+    texture_fails(
+        "bomb.png",
+        &bomb,
+        &["--max-scene-memory", "1024"],
+        &[
+            "is 9000×9000 texels by its header",
+            "more than the scene memory budget of 1024.0 MiB",
+            "refused before decoding",
+        ],
+    );
+}
+
+#[test]
+fn a_jpeg_bomb_is_refused_from_its_header_by_the_device_limit() {
+    // About 600 bytes whose header claims 16384×16384 texels: 2.7 GiB of
+    // mip chain on the device, more than lavapipe's 1 GiB texture image.
+    // The default memory budget (4 GiB) would let the decode start; the
+    // device's limit, known before loading, refuses it first.
+    let bomb = jpeg_bomb(16384);
+    assert!(bomb.len() < 2000, "{} bytes", bomb.len());
+    texture_fails(
+        "bomb.jpg",
+        &bomb,
+        &[],
+        &[
+            "is 16384×16384 texels by its header",
+            "this device's texture image holds",
+            "refused before decoding",
+        ],
+    );
+}
+
+#[test]
+fn a_jpeg_too_small_for_its_header_is_refused_before_decoding() {
+    // 10000×10000 fits the device and the memory budget, but no JPEG of a
+    // few hundred bytes holds it (one bit per 8×8 block: 195 KB at least);
+    // decoded, the missing data would be filled in and rendered (2.6 GB).
+    texture_fails(
+        "short.jpg",
+        &jpeg_bomb(10000),
+        &[],
+        &[
+            "is 10000×10000 texels by its header, but its ",
+            "bytes cannot hold them (a JPEG codes at least a bit per 8×8 block: 195312 bytes at least); refused before decoding",
+        ],
+    );
+}
+
+#[test]
+fn a_texture_larger_than_a_side_is_refused_from_its_header() {
+    texture_fails(
+        "wide.jpg",
+        &jpeg_bomb(20000),
+        &["--reference"],
+        &["is 20000×20000 texels by its header, larger than the 16384 texels a side"],
+    );
+}
+
+/// `tests/data/khronos/BoxTextured` (buffers and image embedded) with one
+/// change, rendered; asserts a clean failure naming the file, `field` and
+/// every string of `must`.
+#[track_caller]
+fn box_textured_fails(change: impl FnOnce(&mut Value), field: &str, must: &[&str]) {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/BoxTextured/BoxTextured.gltf");
+    let mut gltf: Value = serde_json::from_slice(&std::fs::read(data).unwrap()).unwrap();
+    change(&mut gltf);
+    let scene = scene_file("box.gltf", serde_json::to_vec(&gltf).unwrap());
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene.path, out_dir.path(), &[]), &[]);
+    let path = scene.path.display().to_string();
+    let at = format!("{path}: {field}: ");
+    let mut all = vec![at.as_str()];
+    all.extend_from_slice(must);
+    assert_fails(&out, out_dir.path(), &[], Shape::OneLine, &all);
+}
+
+#[test]
+fn gltf_indices_above_u32_are_refused_not_wrapped() {
+    // 2^32 would be read `as u32`, index 0, which exists in this file.
+    box_textured_fails(
+        |g| {
+            g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"] =
+                json!(1u64 << 32)
+        },
+        "materials[0].pbrMetallicRoughness.baseColorTexture.index",
+        &["index 4294967296 is larger than a glTF index can be (4294967295 at most)"],
+    );
+    box_textured_fails(
+        |g| g["textures"][0]["source"] = json!(1u64 << 32),
+        "textures[0].source",
+        &["index 4294967296 is larger than a glTF index can be"],
+    );
+    // In range for u32 but not for the file: the crate's range check.
+    box_textured_fails(
+        |g| g["textures"][0]["source"] = json!(7),
+        "textures[0].source",
+        &["Index out of bounds"],
+    );
+}
+
+#[test]
+fn gltf_texture_transform_errors_name_the_files_field() {
+    box_textured_fails(
+        |g| {
+            g["extensionsUsed"] = json!(["KHR_texture_transform"]);
+            g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+                json!({"KHR_texture_transform": {"scale": [0, 1]}});
+        },
+        "materials[0].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform.scale",
+        &["must be non-zero in u and v"],
+    );
+}
+
+#[test]
+fn gltf_validation_errors_name_the_primitive_not_the_scene_object() {
+    // Scaled by 1e20, the box lies beyond what the kernel's f32 holds; the
+    // scene's validation finds it as objects[0].positions[0].
+    box_textured_fails(
+        |g| {
+            g["nodes"][0]["matrix"] =
+                json!([1e20, 0, 0, 0, 0, 1e20, 0, 0, 0, 0, 1e20, 0, 0, 0, 0, 1]);
+            g["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!({"camera": 0}));
+            g["cameras"] =
+                json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}]);
+            g["scenes"][0]["nodes"] = json!([0, 3]);
+        },
+        "meshes[0].primitives[0].attributes.POSITION",
+        &["vertex 0: must lie within ±1e18", "in world space"],
+    );
+}
+
+#[test]
+fn merge_names_each_repeated_part_once_in_a_bounded_line() {
+    // 10,000 copies (hard links) of one part: one line naming the first few
+    // and counting the rest, not one that lists every earlier copy for each.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("scene.json");
+    std::fs::write(&scene, mutated(|_| {})).unwrap();
+    let part = d.join("part.exr");
+    let out = penumbra(&render_to(&scene, &part, &["--tile", "0/1"]), &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let copies = 10_000;
+    let mut args: Vec<OsString> = vec!["merge".into(), part.clone().into()];
+    for i in 0..copies {
+        let copy = d.join(format!("copy{i:05}.exr"));
+        std::fs::hard_link(&part, &copy).unwrap();
+        args.push(copy.into());
+    }
+    let out_dir = tempfile::tempdir().unwrap();
+    args.extend(["-o".into(), out_dir.path().join("out.png").into()]);
+    let out = penumbra(&args, &[]);
+    let stderr = assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            "tile 0/1: ",
+            "copy00001.exr, ",
+            "copy00005.exr and 9995 more (passes 0..1) repeat passes already in ",
+            "copy00000.exr",
+        ],
+    );
+    assert!(stderr.len() < 1000, "{} bytes", stderr.len());
+    // Each named once (copy00000 is first by name: the one they repeat).
+    for i in 0..copies {
+        let name = format!("copy{i:05}.exr");
+        assert!(stderr.matches(&name).count() <= 1, "{name} twice: {stderr}");
+    }
+}

@@ -244,7 +244,18 @@ fn bad_merges_fail_naming_the_parts_and_write_nothing() {
     fails(
         &merge(&["t0.exr", "t1.exr", "t1.exr", "t2.exr"]),
         d,
-        &["tile 1/3", "t1.exr", "repeats"],
+        &["t1.exr: given 2 times"],
+        "out.png",
+    );
+    std::fs::copy(d.join("t1.exr"), d.join("t1_copy.exr")).unwrap();
+    fails(
+        &merge(&["t0.exr", "t1.exr", "t1_copy.exr", "t2.exr"]),
+        d,
+        &[
+            "tile 1/3: t1_copy.exr (passes ",
+            ") repeats passes already in ",
+            "t1.exr",
+        ],
         "out.png",
     );
     fails(

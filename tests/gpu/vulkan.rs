@@ -292,6 +292,46 @@ fn validation_errors_are_reported() {
     ctx.check_validation().unwrap();
 }
 
+/// A texel image larger than one staging band ([`MAX_KEPT_STAGING`]) is
+/// uploaded band by band (issue 36: a gigabyte of textures is not staged
+/// whole): every texel reads back, across the band boundary and in the
+/// last, partial band.
+#[test]
+fn texel_image_larger_than_a_staging_band_round_trips() {
+    const KERNEL: &str = r#"
+@group(0) @binding(0) var texels: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4<u32>>;
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&output) { return; }
+    output[i] = textureLoad(texels, vec2<u32>(i % 4096u, i / 4096u));
+}
+"#;
+    let ctx = context();
+    let bindings = [BindingType::TexelImage, BindingType::StorageReadWrite];
+    let pipeline = ctx
+        .create_compute_pipeline(&common::compile(KERNEL), "main", &bindings, 0)
+        .unwrap();
+    let band_rows = (MAX_KEPT_STAGING / (TEXEL_ROW as u64 * TEXEL_BYTES as u64)) as usize;
+    let texels = (band_rows + 1) * TEXEL_ROW as usize + TEXEL_ROW as usize / 2;
+    let data = common::pattern(texels * TEXEL_BYTES);
+    let image = ctx.create_texel_image("two bands", &data).unwrap();
+    let output = ctx
+        .create_buffer("output", BufferUsage::Storage, data.len() as u64)
+        .unwrap();
+    let groups = (texels as u32).div_ceil(256);
+    ctx.dispatch(
+        &pipeline,
+        &[(&image).into(), (&output).into()],
+        &[],
+        [groups, 1, 1],
+    )
+    .unwrap();
+    let got = ctx.read_buffer(&output).unwrap();
+    assert!(got == data, "texels differ after the first band");
+}
+
 /// Texel images: every texel reads back through `textureLoad` at the
 /// coordinates the renderer's kernel computes (`i % TEXEL_ROW`,
 /// `i / TEXEL_ROW`), across a row boundary and in the zero-padded tail; an

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p penumbra-tools --bin fuzz -- [--cases N] [--seconds S] [--seed S]
-//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,request] [--out DIR]
+//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture] [--out DIR]
 //! cargo run --release -p penumbra-tools --bin fuzz -- --replay FILE...
 //! cargo run --release -p penumbra-tools --bin fuzz -- --write-seeds DIR
 //! ```
@@ -20,6 +20,7 @@ mod mutate;
 mod request;
 mod seeds;
 mod targets;
+mod texture;
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
@@ -51,7 +52,7 @@ struct Args {
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
     eprintln!(
-        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,request] [--out DIR] | --replay FILE..."
+        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture] [--out DIR] | --replay FILE..."
     );
     std::process::exit(2)
 }
@@ -243,14 +244,14 @@ fn worker(args: &Args, id: usize) -> ExitCode {
         let seed = pick_seed(&seeds, &mut rng).clone();
         let data = make_case(&seed, &json_donors, &byte_donors, &mut rng);
         // Written first, so that the supervisor can save the case if this
-        // process dies: the target, and for WGSL the text (a scene case is
-        // the case file itself).
+        // process dies: the target, and for WGSL and textures the bytes (a
+        // scene case is the case file itself).
         if last_target != Some(seed.target) {
             let _ = std::fs::write(&current, format!("{}\n", seed.target.ext()));
             last_target = Some(seed.target);
         }
-        if seed.target == Target::Wgsl {
-            let _ = std::fs::write(ws.case_path(Target::Wgsl), &data);
+        if matches!(seed.target, Target::Wgsl | Target::Texture) {
+            let _ = std::fs::write(ws.case_path(seed.target), &data);
         }
         stuck.arm();
         let restrict = rng.one_in(4);
@@ -379,6 +380,7 @@ fn make_case(
             data
         }
         Target::Request => request::mutate(&seed.data, byte_donors, rng),
+        Target::Texture => texture::mutate(&seed.data, byte_donors, rng),
         Target::Json | Target::Gltf => {
             if rng.one_in(4) {
                 let mut data = seed.data.clone();

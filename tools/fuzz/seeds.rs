@@ -86,6 +86,15 @@ pub fn all() -> Vec<Seed> {
     ] {
         seeds.extend(file(Target::Wgsl, &r.join("shaders/shading").join(name)));
     }
+    seeds.extend(
+        super::texture::seeds()
+            .into_iter()
+            .map(|(name, data)| Seed {
+                target: Target::Texture,
+                name,
+                data,
+            }),
+    );
     // Tile 0 of 2; the harness merges each mutated copy with a valid tile 1.
     let (name, data) = part(0);
     seeds.push(Seed {

@@ -28,17 +28,21 @@ pub enum Target {
     Part,
     /// A request head to the live page's parser (`watch --serve`).
     Request,
+    /// An image (PNG, JPEG or OpenEXR bytes) through the texture loader
+    /// under a small memory budget (module `texture`).
+    Texture,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 6] = [
+    pub const ALL: [Target; 7] = [
         Target::Json,
         Target::Gltf,
         Target::Glb,
         Target::Wgsl,
         Target::Part,
         Target::Request,
+        Target::Texture,
     ];
 
     /// The file extension (also the name on the command line).
@@ -50,6 +54,7 @@ impl Target {
             Target::Wgsl => "wgsl",
             Target::Part => "exr",
             Target::Request => "request",
+            Target::Texture => "texture",
         }
     }
 
@@ -214,6 +219,13 @@ impl Workspace {
                 }
                 judge::start_case();
                 result = penumbra::panics::catch(|| super::request::run(data));
+            }
+            Target::Texture => {
+                len = data.len();
+                // Well inside the judge's limit, as for the scenes.
+                let budget = (judge::allowed(len) / 2) as u64;
+                judge::start_case();
+                result = penumbra::panics::catch(|| super::texture::run(data, budget));
             }
             _ => {
                 let path = self.case_path(target);

@@ -181,7 +181,7 @@ impl Reader<'_> {
                 let [sx, sy] = t.scale();
                 let field = format!("{field}.extensions.KHR_texture_transform");
                 transform(&[ox, oy, t.rotation(), sx, sy])
-                    .ok_or_else(|| self.err(field, "offset, rotation and scale must be finite"))?
+                    .map_err(|(key, message)| self.err(format!("{field}.{key}"), message))?
             }
             None => UvTransform::default(),
         };
@@ -232,17 +232,16 @@ impl Reader<'_> {
             let v = &ext[k];
             Some([num(&v[0], d)?, num(&v[1], d)?]).filter(|_| v.is_null() || v.is_array())
         };
-        let parts = (|| {
-            let [ox, oy] = pair("offset", 0.0)?;
-            let [sx, sy] = pair("scale", 1.0)?;
-            Some([ox, oy, num(&ext["rotation"], 0.0)?, sx, sy])
-        })();
+        let not_numbers = |key: &str| self.err(format!("{at}.{key}"), "must be finite numbers");
+        let [ox, oy] = pair("offset", 0.0).ok_or_else(|| not_numbers("offset"))?;
+        let [sx, sy] = pair("scale", 1.0).ok_or_else(|| not_numbers("scale"))?;
+        let rotation = num(&ext["rotation"], 0.0).ok_or_else(|| not_numbers("rotation"))?;
         if !ext["texCoord"].is_null() {
             let message = "is not supported on normalTexture; set the normalTexture's texCoord";
             return self.fail(format!("{at}.texCoord"), message);
         }
-        let t = parts.and_then(|p| transform(&p.map(|x| x as f32)));
-        t.ok_or_else(|| self.err(at, "offset, rotation and scale must be finite numbers"))
+        let parts = [ox, oy, rotation, sx, sy].map(|x| x as f32);
+        transform(&parts).map_err(|(key, message)| self.err(format!("{at}.{key}"), message))
     }
 
     /// The texture `t` as a texture id (decoding its image in colour space
@@ -331,10 +330,24 @@ impl Reader<'_> {
     }
 }
 
-/// A transform from `[offset.x, offset.y, rotation, scale.x, scale.y]`;
-/// `None` unless all are finite.
-fn transform(p: &[f32; 5]) -> Option<UvTransform> {
-    p.iter().all(|x| x.is_finite()).then(|| UvTransform {
+/// A transform from `[offset.x, offset.y, rotation, scale.x, scale.y]`,
+/// or the KHR_texture_transform key that is wrong (`offset`, `rotation`,
+/// `scale`) and why: each must be finite, and the scale non-zero in u and v
+/// (the level of detail takes its log), checked here so that the error
+/// names the file's field rather than the scene's shader.
+fn transform(p: &[f32; 5]) -> std::result::Result<UvTransform, (&'static str, String)> {
+    let finite = |key: &'static str, v: &[f32]| match v.iter().all(|x| x.is_finite()) {
+        true => Ok(()),
+        false => Err((key, format!("must be finite, got {v:?}"))),
+    };
+    finite("offset", &p[0..2])?;
+    finite("rotation", &p[2..3])?;
+    finite("scale", &p[3..5])?;
+    if p[3] == 0.0 || p[4] == 0.0 {
+        let message = format!("must be non-zero in u and v, got {:?}", &p[3..5]);
+        return Err(("scale", message));
+    }
+    Ok(UvTransform {
         offset: DVec2::new(f64::from(p[0]), f64::from(p[1])),
         rotation: f64::from(p[2]),
         scale: DVec2::new(f64::from(p[3]), f64::from(p[4])),

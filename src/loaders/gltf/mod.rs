@@ -12,6 +12,8 @@
 //! and can panic on inconsistent files. Every range is checked before a byte is
 //! read, so no file content can make this module panic.
 
+mod fields;
+mod indices;
 mod material;
 mod tangents;
 
@@ -53,6 +55,10 @@ pub struct GltfMesh {
     pub maps: SurfaceMaps,
     /// Where it came from, for messages, e.g. `node 'Bunny' mesh 0 primitive 0`.
     pub name: String,
+    /// Its primitive's field in the file, e.g. `meshes[0].primitives[1]`.
+    pub primitive: String,
+    /// Its primitive's `material` index, if it has one.
+    pub material: Option<usize>,
 }
 
 /// The camera of the file, placed by its node's world transform.
@@ -112,7 +118,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     // of first use; the maps stay per object.
     let mut phongs: Vec<Phong> = Vec::new();
     let mut objects = Vec::with_capacity(doc.meshes.len());
+    let mut origins = Vec::with_capacity(doc.meshes.len());
     for m in doc.meshes {
+        origins.push(fields::Origin {
+            primitive: m.primitive,
+            material: m.material,
+        });
         let shader = phongs
             .iter()
             .position(|p| *p == m.phong)
@@ -162,6 +173,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         objects,
         lights,
     };
+    // Named by the file's fields here; `load_scene` validates again, finding nothing.
+    if let Err(e) = scene.validate() {
+        let shader_of: Vec<usize> = scene.objects.iter().map(|o| o.shader).collect();
+        let (field, message) = fields::file_field(&e.field, &e.message, &origins, &shader_of);
+        return Err(SceneError::new(path, field, message));
+    }
     Ok(Loaded {
         scene,
         notes,
@@ -444,6 +461,13 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
     let invalid = |field: String, e: &dyn std::fmt::Display| {
         SceneError::new(path, field, format!("invalid glTF JSON: {e}"))
     };
+    // Indices above u32 first: the crate would wrap them (module [`indices`]).
+    // A file that is not JSON is left to the parse below, which names where.
+    if let Ok(value) = serde_json::from_slice::<serde_json::Value>(json) {
+        if let Some((field, message)) = indices::first_oversized_index(&value) {
+            return Err(SceneError::new(path, field, message));
+        }
+    }
     let mut de = serde_json::Deserializer::from_slice(json);
     let root: gltf::json::Root = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let field = Some(e.path().to_string())
@@ -733,6 +757,8 @@ impl Reader<'_> {
             phong: material.phong,
             maps: material.maps,
             name,
+            primitive: field.to_string(),
+            material: prim.material().index(),
         }))
     }
 

@@ -83,7 +83,15 @@ pub struct TextureChain {
 /// docs/textures.md), and the 16-bit rounding (at most 7.7e-6) is far below
 /// what 8 bits resolve.
 pub fn texture_words(t: &crate::scene::Texture) -> (Vec<u32>, u32) {
-    let chain = t.mip_chain();
+    let mut words = Vec::with_capacity((t.device_bytes() / 4) as usize);
+    let levels = push_texture_words(t, &mut words);
+    (words, levels)
+}
+
+/// Appends [`texture_words`] of `t` to `words`, level after level, and
+/// returns its number of levels; no level is held beyond the one it is
+/// made from ([`crate::scene::Texture::for_each_mip_level`]).
+fn push_texture_words(t: &crate::scene::Texture, words: &mut Vec<u32>) -> u32 {
     let lut: [u32; 256] = std::array::from_fn(|b| {
         if t.srgb {
             (crate::scene::texture::srgb_to_linear(b as u8) * 65535.0).round() as u32
@@ -91,14 +99,15 @@ pub fn texture_words(t: &crate::scene::Texture) -> (Vec<u32>, u32) {
             b as u32 * 257
         }
     });
-    let mut words = Vec::new();
-    for level in &chain {
-        for p in &level.texels {
+    let mut levels = 0;
+    t.for_each_mip_level(|_, _, texels| {
+        levels += 1;
+        for p in texels {
             words.push(lut[p[0] as usize] | lut[p[1] as usize] << 16);
             words.push(lut[p[2] as usize] | (u32::from(p[3]) * 257) << 16);
         }
-    }
-    (words, chain.len() as u32)
+    });
+    levels
 }
 
 fn wrap_bits(w: Wrap) -> u32 {
@@ -159,20 +168,25 @@ impl GpuTextures {
     pub fn new(scene: &Scene) -> GpuTextures {
         let mut g = GpuTextures::default();
         let uses = scene.texture_uses();
-        // Each texture's chain, at a word offset of its own.
-        let mut words: Vec<u32> = Vec::new();
+        // Each texture's chain, at a word offset of its own, written in
+        // place into one buffer of the final size.
+        let capacity: u64 = scene
+            .textures
+            .iter()
+            .map(|t| (t.device_bytes() / 4).next_multiple_of(4))
+            .sum();
+        let mut words: Vec<u32> = Vec::with_capacity(capacity as usize);
         let mut chains = Vec::with_capacity(scene.textures.len());
         for t in &scene.textures {
             // Each chain starts a texel, so one texture's texels can be
             // rewritten without touching another's ([`texture_words`]).
             words.resize(words.len().next_multiple_of(4), 0);
-            let base = words.len() as u32;
-            let chain = texture_words(t);
-            words.extend(&chain.0);
-            chains.push((base, chain.1));
+            let base = words.len();
+            let levels = push_texture_words(t, &mut words);
+            chains.push((base as u32, levels));
             g.chains.push(TextureChain {
-                first_texel: u64::from(base / 4),
-                words: chain.0.len(),
+                first_texel: (base / 4) as u64,
+                words: words.len() - base,
                 width: t.width,
                 height: t.height,
                 srgb: t.srgb,
@@ -180,10 +194,13 @@ impl GpuTextures {
         }
         g.texture_bytes = g.chains.iter().map(|c| c.words as u64 * 4).sum();
         words.resize(words.len().next_multiple_of(4), 0);
-        g.texels = words
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect();
+        // Four words a texel, the same buffer when its capacity allows.
+        g.texels = bytemuck::allocation::try_cast_vec(words).unwrap_or_else(|(_, words)| {
+            words
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect()
+        });
         for r in &uses {
             let (base, levels) = chains[r.texture];
             g.uses.extend(use_texels(scene, r, base, levels));
