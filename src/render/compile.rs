@@ -33,6 +33,9 @@ pub struct Assembled {
     pub text: String,
     /// (file name, first line in `text` (1-based), number of lines).
     pub files: Vec<(String, u32, u32)>,
+    /// The file that an error without a place is about (a shade program's
+    /// shader file), or `None`: such errors then name "shaders".
+    pub subject: Option<String>,
 }
 
 /// A WGSL file could not be read, parsed or validated, or SPIR-V not written.
@@ -80,6 +83,7 @@ impl ShaderSource {
         let mut out = Assembled {
             text: String::new(),
             files: Vec::new(),
+            subject: None,
         };
         for name in names {
             let (label, body) = self.read(name)?;
@@ -123,22 +127,33 @@ impl Assembled {
         format!("shaders:{line}:{col}")
     }
 
+    /// The file errors without a place are about: the subject, else "shaders".
+    fn subject(&self) -> String {
+        self.subject.clone().unwrap_or_else(|| "shaders".into())
+    }
+
+    /// An error at `loc` of the text, with its line and a caret under it;
+    /// columns and caret count characters, not bytes.
     fn error_at(&self, loc: Option<naga::SourceLocation>, message: String) -> CompileError {
         let Some(loc) = loc else {
             return CompileError {
-                location: "shaders".into(),
+                location: self.subject(),
                 message,
             };
         };
-        let src_line = self
-            .text
-            .lines()
-            .nth(loc.line_number as usize - 1)
-            .unwrap_or("");
-        let caret = " ".repeat(loc.line_position.saturating_sub(1) as usize)
-            + &"^".repeat(loc.length.max(1) as usize);
+        let boundary = |i: usize| crate::scene::shading::scan::floor_char_boundary(&self.text, i);
+        let start = boundary(loc.offset as usize);
+        let end = boundary(start + loc.length as usize);
+        let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = self.text[start..]
+            .find('\n')
+            .map_or(self.text.len(), |i| start + i);
+        let src_line = &self.text[line_start..line_end];
+        let column = self.text[line_start..start].chars().count();
+        let width = self.text[start..end.min(line_end)].chars().count();
+        let caret = " ".repeat(column) + &"^".repeat(width.max(1));
         CompileError {
-            location: self.locate(loc.line_number, loc.line_position),
+            location: self.locate(loc.line_number, column as u32 + 1),
             message: format!("{message}\n  {src_line}\n  {caret}"),
         }
     }
@@ -297,19 +312,22 @@ impl Assembled {
     /// naga reports bad WGSL as errors, but can panic on some inputs; such a
     /// panic becomes a [`CompileError`] too, so no shader file crashes the
     /// renderer or a `watch` loop.
+    ///
+    /// It runs on a thread whose stack holds naga's deepest recursion on a
+    /// shader file within the limits (crate::scene::shading::stack).
     pub fn compile_entry(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
-        crate::panics::catch(|| self.compile_unguarded(key, entry)).unwrap_or_else(|panic| {
-            Err(CompileError {
-                location: "shaders".into(),
-                message: format!("internal error in naga ({panic}); please report this shader"),
+        crate::scene::shading::stack::on_parse_stack(|| self.compile_unguarded(key, entry))
+            .unwrap_or_else(|panic| {
+                Err(CompileError {
+                    location: self.subject(),
+                    message: format!("internal error in naga ({panic}); please report this shader"),
+                })
             })
-        })
     }
 
     /// [`Assembled::compile_entry`] without the panic guard.
     fn compile_unguarded(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
         let kernel = &key.options;
-        use naga::valid::{Capabilities, ValidationFlags, Validator};
         // The feature values, for overrides or (text specialisation) consts.
         // The general kernel compiles in every scene feature, but not the
         // render settings (pixel jitter changes the image; AOVs need their
@@ -337,22 +355,7 @@ impl Assembled {
         } else {
             self.parse()?
         };
-        let mut validator = Validator::new(
-            ValidationFlags::all(),
-            // 64-bit integers for the stage words (render.wgsl's
-            // `stage_words`); a module without them declares no Int64
-            // capability (pruning drops them with STAGE_WORDS off).
-            Capabilities::IMMEDIATES | Capabilities::SUBGROUP | Capabilities::SHADER_INT64,
-        );
-        // Subgroup sums for the ray counters; the Vulkan context only offers
-        // devices that support them in compute shaders.
-        validator
-            .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
-            .subgroup_operations(
-                naga::valid::SubgroupOperationSet::BASIC
-                    | naga::valid::SubgroupOperationSet::ARITHMETIC,
-            );
-        let info = validator
+        let info = validator()
             .validate(&module)
             .map_err(|e| self.error_at(e.location(&self.text), error_chain(e.as_inner())))?;
         self.check_bindings(&module)?;
@@ -395,7 +398,7 @@ impl Assembled {
             &constants,
         )
         .map_err(|e| CompileError {
-            location: "shaders".into(),
+            location: self.subject(),
             message: e.to_string(),
         })?;
         // What the overrides switched off goes before the driver sees it
@@ -420,10 +423,33 @@ impl Assembled {
         naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
             .map(super::spirv::forbid_contraction)
             .map_err(|e| CompileError {
-                location: "shaders".into(),
+                location: self.subject(),
                 message: e.to_string(),
             })
     }
+}
+
+/// naga's validator with the flags and capabilities of the renderer's
+/// modules (also what a user's shader file is validated with when it is
+/// read, crate::scene::shading::wgsl).
+pub fn validator() -> naga::valid::Validator {
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+    let mut validator = Validator::new(
+        ValidationFlags::all(),
+        // 64-bit integers for the stage words (render.wgsl's
+        // `stage_words`); a module without them declares no Int64
+        // capability (pruning drops them with STAGE_WORDS off).
+        Capabilities::IMMEDIATES | Capabilities::SUBGROUP | Capabilities::SHADER_INT64,
+    );
+    // Subgroup sums for the ray counters; the Vulkan context only offers
+    // devices that support them in compute shaders.
+    validator
+        .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+        .subgroup_operations(
+            naga::valid::SubgroupOperationSet::BASIC
+                | naga::valid::SubgroupOperationSet::ARITHMETIC,
+        );
+    validator
 }
 
 /// How the kernel finds the nearest sphere or triangle.

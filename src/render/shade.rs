@@ -106,6 +106,7 @@ pub fn assemble(
     let mut assembled = source.assemble_files(SHADE_PRELUDE)?;
     let label = file.label_in(source);
     assembled.push_file(label.clone(), text);
+    assembled.subject = Some(label.clone());
     // What the file declares (crate::scene::shading::wgsl, which also
     // checks `shade` and `ambient`); a file without Params gets the
     // placeholder that `shade` still takes.

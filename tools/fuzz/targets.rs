@@ -143,7 +143,11 @@ impl Workspace {
             files.push((label.clone(), line, n));
             line += n;
         }
-        Assembled { text: out, files }
+        Assembled {
+            text: out,
+            files,
+            subject: None,
+        }
     }
 
     /// Runs one case and judges it. `name` is the seed's file name (for WGSL:
