@@ -21,17 +21,6 @@ pub fn check(
     user: impl Fn(naga::Span) -> Option<Range<usize>>,
     name: impl Fn(naga::Handle<naga::Type>) -> String,
 ) -> Result<(), Excess> {
-    let mut layouter = naga::proc::Layouter::default();
-    if let Err(e) = layouter.update(module.to_ctx()) {
-        return Err((
-            user(module.types.get_span(e.ty)),
-            format!(
-                "type {} is too large to lay out; a shader may hold at most {MAX_INVOCATION_BYTES} bytes per invocation",
-                name(e.ty)
-            ),
-        ));
-    }
-    let size = |h: naga::Handle<naga::Type>| u64::from(layouter[h].size);
     // The user's variables: private globals, then each function's locals
     // (counted together: one invocation may call every function).
     let globals = module
@@ -49,17 +38,32 @@ pub fn check(
                 .filter_map(|(h, v)| Some((user(f.local_variables.get_span(h))?, v.ty)))
         });
     let variables: Vec<(Range<usize>, naga::Handle<naga::Type>)> = globals.chain(locals).collect();
+    let mut layouter = naga::proc::Layouter::default();
+    // The place of a value of type `h`: a variable of that type, the
+    // type's own place, or where the file spells its size.
+    let place = |h: naga::Handle<naga::Type>| {
+        variables
+            .iter()
+            .find(|(_, ty)| *ty == h)
+            .map(|(r, _)| r.clone())
+            .or_else(|| user(module.types.get_span(h)))
+            .or_else(|| array_size_in(source, module, h))
+    };
+    if let Err(e) = layouter.update(module.to_ctx()) {
+        return Err((
+            place(e.ty),
+            format!(
+                "type {} is too large to lay out; a shader may hold at most {MAX_INVOCATION_BYTES} bytes per invocation",
+                name(e.ty)
+            ),
+        ));
+    }
+    let size = |h: naga::Handle<naga::Type>| u64::from(layouter[h].size);
     // Any one value first, so that a huge array is reported as itself.
     for (h, _) in module.types.iter() {
         if size(h) > MAX_INVOCATION_BYTES {
-            let at = variables
-                .iter()
-                .find(|(_, ty)| *ty == h)
-                .map(|(r, _)| r.clone())
-                .or_else(|| user(module.types.get_span(h)))
-                .or_else(|| array_size_in(source, module, h));
             return Err((
-                at,
+                place(h),
                 format!(
                     "a value of type {} takes {} bytes; a shader may hold at most {MAX_INVOCATION_BYTES} bytes per invocation",
                     name(h),
