@@ -415,7 +415,7 @@ impl Assembled {
                 (module.into_owned(), info.into_owned())
             }
         };
-        let options = spirv_options();
+        let options = spirv_options(entry == super::shade::SHADE_ENTRY_POINT);
         let pipeline = naga::back::spv::PipelineOptions {
             shader_stage: naga::ShaderStage::Compute,
             entry_point: entry.to_string(),
@@ -699,20 +699,30 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 }
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we
-/// request, no debug info, and no bounds checks of naga's own on buffers
-/// (every index is bounded by the counts in `Globals`) or texel fetches
-/// (every BVH record index comes from the encoder; naga's clamp would cost
-/// lavapipe an image-size call per fetch). Local arrays keep naga's
-/// clamping.
-fn spirv_options() -> naga::back::spv::Options<'static> {
+/// request, and no debug info. The engine's stages (`user_code` false) have
+/// no bounds checks of naga's own on buffers (every index is bounded by the
+/// counts in `Globals`) or texel fetches (every BVH record index comes from
+/// the encoder; naga's clamp would cost lavapipe an image-size call per
+/// fetch). The shade stage runs a user's shader file, whose values (a
+/// texture index given to `texture_sample`) reach the engine's buffers and
+/// texel images, so there naga clamps every buffer index and texel
+/// coordinate into range (`Restrict`; naga sets the policy per module, so
+/// the shade stage's own accesses pay too: docs/shaders.md has the cost).
+/// Local arrays keep naga's clamping everywhere.
+fn spirv_options(user_code: bool) -> naga::back::spv::Options<'static> {
     use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
+    let engine = if user_code {
+        BoundsCheckPolicy::Restrict
+    } else {
+        BoundsCheckPolicy::Unchecked
+    };
     naga::back::spv::Options {
         lang_version: (1, 3),
         flags: naga::back::spv::WriterFlags::empty(),
         bounds_check_policies: BoundsCheckPolicies {
             index: BoundsCheckPolicy::Restrict,
-            buffer: BoundsCheckPolicy::Unchecked,
-            image_load: BoundsCheckPolicy::Unchecked,
+            buffer: engine,
+            image_load: engine,
             binding_array: BoundsCheckPolicy::Restrict,
         },
         ..Default::default()

@@ -455,6 +455,44 @@ mod tests {
         assert!(!int64(false));
     }
 
+    /// The shade stage runs user code: naga clamps its texel fetches (an
+    /// image-size query each) and buffer indices, which the engine's other
+    /// stages leave unchecked (none of their files asks for an image's size).
+    #[test]
+    fn the_shade_stage_is_bounds_checked() {
+        /// `OpImageQuerySizeLod` and `OpImageQuerySize`.
+        const QUERIES: [u32; 2] = [103, 104];
+        let queries = |words: &[u32]| {
+            let mut n = 0;
+            let mut at = 5;
+            while at < words.len() {
+                let (op, count) = (words[at] & 0xffff, (words[at] >> 16) as usize);
+                n += usize::from(QUERIES.contains(&op));
+                at += count.max(1);
+            }
+            n
+        };
+        let file = ProgramFile::User("painted.wgsl".into());
+        let text = include_str!("../../scenes/shaders/painted.wgsl");
+        let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
+        let key = super::super::StageKernel {
+            features: variant(&Features {
+                textures: true,
+                ..Features::default()
+            }),
+            ..Default::default()
+        };
+        let shade = s.assembled.compile_entry(&key, SHADE_ENTRY_POINT).unwrap();
+        assert!(queries(&shade) > 0, "no bounds checks in the shade stage");
+        for stage in super::super::stages::Stage::FRAME {
+            let assembled = ShaderSource::Embedded.assemble_stage(stage).unwrap();
+            let words = assembled
+                .compile_entry(&Default::default(), stage.entry_point())
+                .unwrap();
+            assert_eq!(queries(&words), 0, "{}", stage.entry_point());
+        }
+    }
+
     #[test]
     fn a_file_without_params_gets_the_placeholder() {
         let file = ProgramFile::User("normals.wgsl".into());
