@@ -559,8 +559,10 @@ pub fn mutate_shader(text: &str, rng: &mut Rng) -> String {
     let mut out = lines.join("\n");
     if rng.one_in(4) {
         // Ends without a line break, possibly inside a character's comment.
-        out.push_str(*rng.pick(&["/* ", "// ", ""]));
-        out.push_str(*rng.pick(MULTIBYTE));
+        let comment: &&str = rng.pick(&["/* ", "// ", ""]);
+        let character: &&str = rng.pick(MULTIBYTE);
+        out.push_str(comment);
+        out.push_str(character);
     }
     out
 }

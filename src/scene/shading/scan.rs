@@ -85,16 +85,16 @@ pub fn check(source: &str) -> Result<(), Refusal> {
                     );
                 }
             }
-            Kind::Ident if matches!(text, "group" | "binding") => {
-                if before[1]
-                    .as_ref()
-                    .is_some_and(|b| b.kind == Kind::Punct('@'))
-                {
-                    return refuse(
-                        &t,
-                        format!("`@{text}`: a shader file must not declare resources; it reaches the scene only through Surface, LightSample, Params, texture_sample and texture_at"),
-                    );
-                }
+            Kind::Ident
+                if matches!(text, "group" | "binding")
+                    && before[1]
+                        .as_ref()
+                        .is_some_and(|b| b.kind == Kind::Punct('@')) =>
+            {
+                return refuse(
+                    &t,
+                    format!("`@{text}`: a shader file must not declare resources; it reaches the scene only through Surface, LightSample, Params, texture_sample and texture_at"),
+                );
             }
             Kind::Ident => {
                 let after_var_angle = matches!(

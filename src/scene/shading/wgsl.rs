@@ -704,9 +704,12 @@ fn validate(
             ));
         }
     }
-    let validated =
-        super::stack::on_parse_stack(|| crate::render::compile::validator().validate(module))
-            .map_err(|m| (None, format!("internal error in naga's validator ({m})")))?;
+    let validated = super::stack::on_parse_stack(|| {
+        crate::render::compile::validator()
+            .validate(module)
+            .map_err(Box::new)
+    })
+    .map_err(|m| (None, format!("internal error in naga's validator ({m})")))?;
     let info = validated.map_err(|e| {
         let at = e.spans().find_map(|(span, _)| user(*span));
         let at = at.or_else(|| {
