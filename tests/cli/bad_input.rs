@@ -1222,3 +1222,21 @@ fn naga_errors_name_the_users_file_and_place() {
         &["`shade` uses an operation that the shade stage, a compute shader, cannot run"],
     );
 }
+
+/// Array values count like variables: 500 `let` arrays indexed at run time
+/// grew the renderer to 4.7 GB and ran past 120 s before they did.
+#[test]
+fn array_values_indexed_at_run_time_are_refused() {
+    let lets: String = (0..500)
+        .map(|i| format!("    let a{i} = array<f32, 4096>();\n    x += a{i}[u32(s.uv.x)];\n"))
+        .collect();
+    hostile_fails(
+        &hostile_shade(&format!("    var x = 0.0;\n{lets}")),
+        ":3:14: ",
+        Shape::Source,
+        &[
+            "array values take",
+            "a shader may hold at most 16384 bytes per invocation",
+        ],
+    );
+}

@@ -266,7 +266,10 @@ impl Workspace {
             }
         }
         let time = t0.elapsed();
-        let peak = judge::case_peak(start);
+        let peak = match target.compiles() {
+            true => judge::case_peak(start).max(judge::case_peak_all()),
+            false => judge::case_peak(start),
+        };
         // Messages name the case file; without its temporary folder they
         // are the same from run to run.
         let folder = format!("{}/", self.dir.display());

@@ -28,11 +28,12 @@ pub const MAX_STATEMENT_TOKENS: usize = 1024;
 /// `fn` declarations in a file. The project's files declare at most 4.
 pub const MAX_FUNCTIONS: usize = 64;
 
-/// Bytes of the variables in the function and private address spaces that
-/// one invocation of the shade stage holds, and of any one value (each
-/// lane of lavapipe, or each GPU thread, keeps its own copy; an
-/// `array<f32, 1000000>` hung the renderer at 2.1 GB). The project's
-/// files declare none.
+/// Bytes that one invocation of the shade stage holds: the variables in the
+/// function and private address spaces and the array and struct values of
+/// the file's functions together, and any one value (each lane of
+/// lavapipe, or each GPU thread, keeps its own copy; an
+/// `array<f32, 1000000>` hung the renderer at 2.1 GB). The project's files
+/// hold at most 600 bytes (arguments and `Params` values).
 pub const MAX_INVOCATION_BYTES: u64 = 16 * 1024;
 
 /// Members of `struct Params`. The built-in shaders have 7.

@@ -184,6 +184,9 @@ pub struct Reflection {
     pub has_ambient: bool,
     /// The file defines `fn prepare`.
     pub has_prepare: bool,
+    /// The bytes one invocation holds (variables, array and struct values;
+    /// [`super::footprint`]).
+    pub invocation_bytes: u64,
 }
 
 /// A place in a shader file, for an error message.
@@ -508,8 +511,9 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
     };
 
     // What one invocation holds, before any further work on the module.
-    super::footprint::check(&module, source, user_range, |h| type_name(&module, h))
-        .map_err(|(r, message)| err(r.map(|r| locate(source, r.start, r.end)), message))?;
+    let invocation_bytes =
+        super::footprint::check(&module, source, user_range, |h| type_name(&module, h))
+            .map_err(|(r, message)| err(r.map(|r| locate(source, r.start, r.end)), message))?;
 
     let mut fields = Vec::new();
     if let Some(declared) = params_at {
@@ -676,6 +680,7 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         fields,
         has_ambient: ambient.is_some(),
         has_prepare: prepare.is_some(),
+        invocation_bytes,
     })
 }
 
@@ -1041,11 +1046,20 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             (
                 with_body("    var a: array<f32, 3000>;\n    var b: array<f32, 3000>;"),
                 (3, 5),
-                format!("24000 bytes up to here; a shader may hold at most {MAX_INVOCATION_BYTES}"),
+                format!("take 24000 bytes up to here; a shader may hold at most {MAX_INVOCATION_BYTES}"),
+            ),
+            (
+                format!(
+                    "const big = array<f32, 4096>();\n{}",
+                    with_body("    let a = big[u32(s.uv.x)];\n    let b = array<f32, 4096>();\n    let c = b[u32(s.uv.y)];")
+                ),
+                // `big` (16 384 bytes) and the arguments of `shade`.
+                (3, 13),
+                "array values take 16532 bytes up to here".into(),
             ),
             (
                 with_body("    let a = array<f32, 100000000>();"),
-                (2, 24),
+                (2, 13),
                 "takes 400000000 bytes".into(),
             ),
             (
@@ -1145,18 +1159,14 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             }
         }
         let (mut bytes, mut depth, mut statement, mut functions) = (0, 0, 0, 0);
+        let mut held = 0;
         for p in &files {
             let text = std::fs::read_to_string(p).unwrap();
-            reflect(p, &text).unwrap_or_else(|e| {
+            match reflect(p, &text) {
+                Ok(r) => held = held.max(r.invocation_bytes),
                 // checker.wgsl and shader.wgsl are engine files, not shade programs.
-                assert!(!p.starts_with(root.join("scenes")), "{e}");
-                Reflection {
-                    has_params: false,
-                    fields: vec![],
-                    has_ambient: false,
-                    has_prepare: false,
-                }
-            });
+                Err(e) => assert!(!p.starts_with(root.join("scenes")), "{e}"),
+            }
             bytes = bytes.max(text.len());
             let (mut d, mut n, mut f) = (0usize, 0usize, 0usize);
             for t in tokens(&text) {
@@ -1177,7 +1187,8 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             }
             functions = functions.max(f);
         }
-        eprintln!("largest {bytes} bytes, nesting {depth}, statement {statement} tokens, {functions} functions");
+        eprintln!("largest {bytes} bytes, nesting {depth}, statement {statement} tokens, {functions} functions, {held} bytes an invocation");
+        assert!(held * 10 <= MAX_INVOCATION_BYTES, "{held}");
         assert!(bytes * 10 <= MAX_SOURCE_BYTES, "{bytes}");
         assert!(depth * 5 <= MAX_NESTING, "{depth}");
         assert!(statement * 10 <= MAX_STATEMENT_TOKENS, "{statement}");
