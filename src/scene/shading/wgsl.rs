@@ -1214,7 +1214,7 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n{body}\n}}\n"
         );
         super::super::scan::check(&source).unwrap();
-        let text = format!("{INTERFACE}\n{PLACEHOLDER_PARAMS}{source}");
+        let text = format!("{TEXTURES}\n{INTERFACE}\n{PLACEHOLDER_PARAMS}{source}");
         let parsed = std::thread::Builder::new()
             .stack_size(PARSE_STACK_BYTES / 8)
             .spawn(move || {
@@ -1225,9 +1225,8 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
             .unwrap()
             .join()
             .expect("no overflow");
-        // The interface uses texture sampling declared elsewhere: only
-        // the nesting and the chain matter here.
-        let _ = parsed;
+        // Parsed and lowered: the whole recursion ran.
+        parsed.unwrap();
         let small = std::thread::Builder::new()
             .stack_size(256 * 1024)
             .spawn(move || reflect(Path::new("deep.wgsl"), &source).map(|_| ()))
