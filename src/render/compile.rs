@@ -33,6 +33,9 @@ pub struct Assembled {
     pub text: String,
     /// (file name, first line in `text` (1-based), number of lines).
     pub files: Vec<(String, u32, u32)>,
+    /// The file that an error without a place is about (a shade program's
+    /// shader file), or `None`: such errors then name "shaders".
+    pub subject: Option<String>,
 }
 
 /// A WGSL file could not be read, parsed or validated, or SPIR-V not written.
@@ -80,6 +83,7 @@ impl ShaderSource {
         let mut out = Assembled {
             text: String::new(),
             files: Vec::new(),
+            subject: None,
         };
         for name in names {
             let (label, body) = self.read(name)?;
@@ -123,22 +127,33 @@ impl Assembled {
         format!("shaders:{line}:{col}")
     }
 
+    /// The file errors without a place are about: the subject, else "shaders".
+    fn subject(&self) -> String {
+        self.subject.clone().unwrap_or_else(|| "shaders".into())
+    }
+
+    /// An error at `loc` of the text, with its line and a caret under it;
+    /// columns and caret count characters, not bytes.
     fn error_at(&self, loc: Option<naga::SourceLocation>, message: String) -> CompileError {
         let Some(loc) = loc else {
             return CompileError {
-                location: "shaders".into(),
+                location: self.subject(),
                 message,
             };
         };
-        let src_line = self
-            .text
-            .lines()
-            .nth(loc.line_number as usize - 1)
-            .unwrap_or("");
-        let caret = " ".repeat(loc.line_position.saturating_sub(1) as usize)
-            + &"^".repeat(loc.length.max(1) as usize);
+        let boundary = |i: usize| crate::scene::shading::scan::floor_char_boundary(&self.text, i);
+        let start = boundary(loc.offset as usize);
+        let end = boundary(start + loc.length as usize);
+        let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = self.text[start..]
+            .find('\n')
+            .map_or(self.text.len(), |i| start + i);
+        let src_line = &self.text[line_start..line_end];
+        let column = self.text[line_start..start].chars().count();
+        let width = self.text[start..end.min(line_end)].chars().count();
+        let caret = " ".repeat(column) + &"^".repeat(width.max(1));
         CompileError {
-            location: self.locate(loc.line_number, loc.line_position),
+            location: self.locate(loc.line_number, column as u32 + 1),
             message: format!("{message}\n  {src_line}\n  {caret}"),
         }
     }
@@ -297,19 +312,22 @@ impl Assembled {
     /// naga reports bad WGSL as errors, but can panic on some inputs; such a
     /// panic becomes a [`CompileError`] too, so no shader file crashes the
     /// renderer or a `watch` loop.
+    ///
+    /// It runs on a thread whose stack holds naga's deepest recursion on a
+    /// shader file within the limits (crate::scene::shading::stack).
     pub fn compile_entry(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
-        crate::panics::catch(|| self.compile_unguarded(key, entry)).unwrap_or_else(|panic| {
-            Err(CompileError {
-                location: "shaders".into(),
-                message: format!("internal error in naga ({panic}); please report this shader"),
+        crate::scene::shading::stack::on_parse_stack(|| self.compile_unguarded(key, entry))
+            .unwrap_or_else(|panic| {
+                Err(CompileError {
+                    location: self.subject(),
+                    message: format!("internal error in naga ({panic}); please report this shader"),
+                })
             })
-        })
     }
 
     /// [`Assembled::compile_entry`] without the panic guard.
     fn compile_unguarded(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
         let kernel = &key.options;
-        use naga::valid::{Capabilities, ValidationFlags, Validator};
         // The feature values, for overrides or (text specialisation) consts.
         // The general kernel compiles in every scene feature, but not the
         // render settings (pixel jitter changes the image; AOVs need their
@@ -337,22 +355,7 @@ impl Assembled {
         } else {
             self.parse()?
         };
-        let mut validator = Validator::new(
-            ValidationFlags::all(),
-            // 64-bit integers for the stage words (render.wgsl's
-            // `stage_words`); a module without them declares no Int64
-            // capability (pruning drops them with STAGE_WORDS off).
-            Capabilities::IMMEDIATES | Capabilities::SUBGROUP | Capabilities::SHADER_INT64,
-        );
-        // Subgroup sums for the ray counters; the Vulkan context only offers
-        // devices that support them in compute shaders.
-        validator
-            .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
-            .subgroup_operations(
-                naga::valid::SubgroupOperationSet::BASIC
-                    | naga::valid::SubgroupOperationSet::ARITHMETIC,
-            );
-        let info = validator
+        let info = validator()
             .validate(&module)
             .map_err(|e| self.error_at(e.location(&self.text), error_chain(e.as_inner())))?;
         self.check_bindings(&module)?;
@@ -395,7 +398,7 @@ impl Assembled {
             &constants,
         )
         .map_err(|e| CompileError {
-            location: "shaders".into(),
+            location: self.subject(),
             message: e.to_string(),
         })?;
         // What the overrides switched off goes before the driver sees it
@@ -412,7 +415,7 @@ impl Assembled {
                 (module.into_owned(), info.into_owned())
             }
         };
-        let options = spirv_options();
+        let options = spirv_options(entry == super::shade::SHADE_ENTRY_POINT);
         let pipeline = naga::back::spv::PipelineOptions {
             shader_stage: naga::ShaderStage::Compute,
             entry_point: entry.to_string(),
@@ -420,10 +423,33 @@ impl Assembled {
         naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
             .map(super::spirv::forbid_contraction)
             .map_err(|e| CompileError {
-                location: "shaders".into(),
+                location: self.subject(),
                 message: e.to_string(),
             })
     }
+}
+
+/// naga's validator with the flags and capabilities of the renderer's
+/// modules (also what a user's shader file is validated with when it is
+/// read, crate::scene::shading::wgsl).
+pub fn validator() -> naga::valid::Validator {
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+    let mut validator = Validator::new(
+        ValidationFlags::all(),
+        // 64-bit integers for the stage words (render.wgsl's
+        // `stage_words`); a module without them declares no Int64
+        // capability (pruning drops them with STAGE_WORDS off).
+        Capabilities::IMMEDIATES | Capabilities::SUBGROUP | Capabilities::SHADER_INT64,
+    );
+    // Subgroup sums for the ray counters; the Vulkan context only offers
+    // devices that support them in compute shaders.
+    validator
+        .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+        .subgroup_operations(
+            naga::valid::SubgroupOperationSet::BASIC
+                | naga::valid::SubgroupOperationSet::ARITHMETIC,
+        );
+    validator
 }
 
 /// How the kernel finds the nearest sphere or triangle.
@@ -673,20 +699,30 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 }
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we
-/// request, no debug info, and no bounds checks of naga's own on buffers
-/// (every index is bounded by the counts in `Globals`) or texel fetches
-/// (every BVH record index comes from the encoder; naga's clamp would cost
-/// lavapipe an image-size call per fetch). Local arrays keep naga's
-/// clamping.
-fn spirv_options() -> naga::back::spv::Options<'static> {
+/// request, and no debug info. The engine's stages (`user_code` false) have
+/// no bounds checks of naga's own on buffers (every index is bounded by the
+/// counts in `Globals`) or texel fetches (every BVH record index comes from
+/// the encoder; naga's clamp would cost lavapipe an image-size call per
+/// fetch). The shade stage runs a user's shader file, whose values (a
+/// texture index given to `texture_sample`) reach the engine's buffers and
+/// texel images, so there naga clamps every buffer index and texel
+/// coordinate into range (`Restrict`; naga sets the policy per module, so
+/// the shade stage's own accesses pay too: docs/shaders.md has the cost).
+/// Local arrays keep naga's clamping everywhere.
+fn spirv_options(user_code: bool) -> naga::back::spv::Options<'static> {
     use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
+    let engine = if user_code {
+        BoundsCheckPolicy::Restrict
+    } else {
+        BoundsCheckPolicy::Unchecked
+    };
     naga::back::spv::Options {
         lang_version: (1, 3),
         flags: naga::back::spv::WriterFlags::empty(),
         bounds_check_policies: BoundsCheckPolicies {
             index: BoundsCheckPolicy::Restrict,
-            buffer: BoundsCheckPolicy::Unchecked,
-            image_load: BoundsCheckPolicy::Unchecked,
+            buffer: engine,
+            image_load: engine,
             binding_array: BoundsCheckPolicy::Restrict,
         },
         ..Default::default()

@@ -106,6 +106,7 @@ pub fn assemble(
     let mut assembled = source.assemble_files(SHADE_PRELUDE)?;
     let label = file.label_in(source);
     assembled.push_file(label.clone(), text);
+    assembled.subject = Some(label.clone());
     // What the file declares (crate::scene::shading::wgsl, which also
     // checks `shade` and `ambient`); a file without Params gets the
     // placeholder that `shade` still takes.
@@ -452,6 +453,44 @@ mod tests {
         };
         assert!(int64(true));
         assert!(!int64(false));
+    }
+
+    /// The shade stage runs user code: naga clamps its texel fetches (an
+    /// image-size query each) and buffer indices, which the engine's other
+    /// stages leave unchecked (none of their files asks for an image's size).
+    #[test]
+    fn the_shade_stage_is_bounds_checked() {
+        /// `OpImageQuerySizeLod` and `OpImageQuerySize`.
+        const QUERIES: [u32; 2] = [103, 104];
+        let queries = |words: &[u32]| {
+            let mut n = 0;
+            let mut at = 5;
+            while at < words.len() {
+                let (op, count) = (words[at] & 0xffff, (words[at] >> 16) as usize);
+                n += usize::from(QUERIES.contains(&op));
+                at += count.max(1);
+            }
+            n
+        };
+        let file = ProgramFile::User("painted.wgsl".into());
+        let text = include_str!("../../scenes/shaders/painted.wgsl");
+        let s = assemble(&ShaderSource::Embedded, &file, text).unwrap();
+        let key = super::super::StageKernel {
+            features: variant(&Features {
+                textures: true,
+                ..Features::default()
+            }),
+            ..Default::default()
+        };
+        let shade = s.assembled.compile_entry(&key, SHADE_ENTRY_POINT).unwrap();
+        assert!(queries(&shade) > 0, "no bounds checks in the shade stage");
+        for stage in super::super::stages::Stage::FRAME {
+            let assembled = ShaderSource::Embedded.assemble_stage(stage).unwrap();
+            let words = assembled
+                .compile_entry(&Default::default(), stage.entry_point())
+                .unwrap();
+            assert_eq!(queries(&words), 0, "{}", stage.entry_point());
+        }
     }
 
     #[test]

@@ -1276,3 +1276,210 @@ fn merge_names_each_repeated_part_once_in_a_bounded_line() {
         assert!(stderr.matches(&name).count() <= 1, "{name} twice: {stderr}");
     }
 }
+
+// ------------------------------------------ hostile user shaders (issue 36)
+
+/// The sphere of the base scene shaded by `hostile.wgsl` with text `source`
+/// (no params); returns the folder and the scene path.
+fn hostile_scene(source: &str) -> (TempDir, PathBuf) {
+    let (dir, scene) = wgsl_scene("hostile.wgsl", None, &[]);
+    std::fs::write(dir.path().join("hostile.wgsl"), source).unwrap();
+    (dir, scene)
+}
+
+/// `fn shade` with `body` before its return.
+fn hostile_shade(body: &str) -> String {
+    format!("fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n{body}\n    return s.normal;\n}}\n")
+}
+
+/// Renders the scene of [`hostile_scene`] and asserts a clean failure of
+/// `shape` that names the scene file, its field `shaders.toon.file`,
+/// `hostile.wgsl` followed by `place` (`:LINE:COL: `, or `: ` without a
+/// place), and every string of `must`.
+#[track_caller]
+fn hostile_fails(source: &str, place: &str, shape: Shape, must: &[&str]) -> String {
+    let (_dir, scene) = hostile_scene(source);
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene, out_dir.path(), &[]), &[]);
+    let path = scene.display().to_string();
+    let file = format!("hostile.wgsl{place}");
+    let mut all = vec![path.as_str(), ": shaders.toon.file: ", file.as_str()];
+    all.extend_from_slice(must);
+    assert_fails(&out, out_dir.path(), &[], shape, &all)
+}
+
+/// A multibyte character in a comment panicked the comment scan (exit 70):
+/// the file renders, in every kind of comment and at the end of the file.
+#[test]
+fn a_multibyte_character_in_a_shader_comment_renders() {
+    let source = format!(
+        "/* é 🦀 /* ü */ */\n// ß\n{}/* ä",
+        hostile_shade("    let x = 1.0; /* é */")
+    );
+    let (_dir, scene) = hostile_scene(&source);
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&scene, out_dir.path(), &[]), &[]);
+    // An unterminated comment at the end is a syntax error, at its place.
+    assert_fails(&out, out_dir.path(), &[], Shape::Source, &["hostile.wgsl:"]);
+    let source = source.trim_end_matches("/* ä").to_string() + "/* ä */";
+    std::fs::write(scene.parent().unwrap().join("hostile.wgsl"), source).unwrap();
+    let out = penumbra(&render_args(&scene, out_dir.path(), &[]), &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_huge_function_array_is_refused_before_work() {
+    hostile_fails(
+        &hostile_shade("    var a: array<f32, 100000000>;\n    a[0] = 1.0;"),
+        ":2:5: ",
+        Shape::Source,
+        &["array<f32, 100000000> takes 400000000 bytes; a shader may hold at most 16384 bytes per invocation"],
+    );
+}
+
+#[test]
+fn huge_private_and_workgroup_arrays_are_refused() {
+    hostile_fails(
+        &format!(
+            "var<private> a: array<f32, 1000000>;\n{}",
+            hostile_shade("")
+        ),
+        ":1:1: ",
+        Shape::Source,
+        &["takes 4000000 bytes"],
+    );
+    hostile_fails(
+        &format!("var<workgroup> a: array<f32, 1000000>;\n{}", hostile_shade("")),
+        ":1:5: ",
+        Shape::Source,
+        &["`var<workgroup>`: a shader file may declare variables only in the function and private address spaces"],
+    );
+}
+
+#[test]
+fn a_type_too_large_to_lay_out_names_the_file() {
+    hostile_fails(
+        &hostile_shade("    var a: array<array<f32, 1000000>, 1000000>;"),
+        ":2:",
+        Shape::Source,
+        &["is too large to lay out; a shader may hold at most 16384 bytes"],
+    );
+}
+
+/// The issue's 60 KB file whose return is a sum of 30 000 terms overflowed
+/// naga's stack (exit 134).
+#[test]
+fn a_sum_of_30000_terms_is_refused_before_naga() {
+    let sum = vec!["s.normal"; 7_000].join("+");
+    hostile_fails(
+        &format!(
+            "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n    return {sum};\n}}\n"
+        ),
+        ":2:",
+        Shape::Source,
+        &["this statement has more than 1024 tokens"],
+    );
+    let sum = vec!["1.0"; 30_000].join("+");
+    let source = format!(
+        "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n    return vec3<f32>({sum});\n}}\n"
+    );
+    assert!(source.len() > 64 * 1024);
+    hostile_fails(
+        &source,
+        ":2:",
+        Shape::Source,
+        &["a shader file may have at most 65536 bytes"],
+    );
+}
+
+/// 2 000 nested parentheses: naga's "internal WGSL front end error", now
+/// refused with the place of the 33rd level.
+#[test]
+fn two_thousand_nested_parentheses_are_refused_at_their_place() {
+    let deep = format!("{}1.0{}", "(".repeat(2000), ")".repeat(2000));
+    hostile_fails(
+        &hostile_shade(&format!("    let x = {deep};")),
+        ":2:44: ",
+        Shape::Source,
+        &["brackets nest more than 32 deep"],
+    );
+}
+
+#[test]
+fn too_many_functions_and_params_fields_are_refused() {
+    let functions: String = (0..200).map(|i| format!("fn f{i}() {{}}\n")).collect();
+    hostile_fails(
+        &format!("{functions}{}", hostile_shade("")),
+        ":65:1: ",
+        Shape::Source,
+        &["more than 64 functions, the limit of one shader file"],
+    );
+    let fields: String = (0..10_000).map(|i| format!("f{i}: f32,")).collect();
+    hostile_fails(
+        &format!("struct Params {{ {fields} }}\n{}", hostile_shade("")),
+        ":1:",
+        Shape::Source,
+        &["a shader file may have at most 65536 bytes"],
+    );
+    let fields: String = (0..100).map(|i| format!("f{i}: f32,\n")).collect();
+    hostile_fails(
+        &format!("struct Params {{\n{fields}}}\n{}", hostile_shade("")),
+        ":66:1: ",
+        Shape::Source,
+        &["Params has more than 64 fields, the limit"],
+    );
+}
+
+/// A user file that declares the engine's buffers at their bindings could
+/// read and write them out of range.
+#[test]
+fn a_shader_declaring_resources_is_refused() {
+    hostile_fails(
+        &format!(
+            "@group(0) @binding(3) var<storage, read_write> counters: array<u32>;\n{}",
+            hostile_shade("    counters[100000000u] = 1u;")
+        ),
+        ":1:2: ",
+        Shape::Source,
+        &["`@group`: a shader file must not declare resources"],
+    );
+}
+
+/// naga's errors that named "shaders" and no place: an override without a
+/// value, an operation a compute shader cannot run.
+#[test]
+fn naga_errors_name_the_users_file_and_place() {
+    hostile_fails(
+        &format!(
+            "override gain: f32;\n{}",
+            hostile_shade("    let g = gain;")
+        ),
+        ":1:",
+        Shape::Source,
+        &["override `gain` has no value"],
+    );
+    hostile_fails(
+        &hostile_shade("    let d = dpdx(s.position.x);"),
+        ":1:",
+        Shape::Source,
+        &["`shade` uses an operation that the shade stage, a compute shader, cannot run"],
+    );
+}
+
+/// Array values count like variables: 500 `let` arrays indexed at run time
+/// grew the renderer to 4.7 GB and ran past 120 s before they did.
+#[test]
+fn array_values_indexed_at_run_time_are_refused() {
+    let lets: String = (0..500)
+        .map(|i| format!("    let a{i} = array<f32, 4096>();\n    x += a{i}[u32(s.uv.x)];\n"))
+        .collect();
+    hostile_fails(
+        &hostile_shade(&format!("    var x = 0.0;\n{lets}")),
+        ":3:14: ",
+        Shape::Source,
+        &[
+            "array values take",
+            "a shader may hold at most 16384 bytes per invocation",
+        ],
+    );
+}

@@ -2,10 +2,13 @@
 //! an allocation out of proportion to the input is a bug.
 //!
 //! Memory is measured by a counting global allocator with per-thread totals,
-//! so the peak of one case is the peak of the worker thread that ran it.
+//! so the peak of one case is the peak of the worker thread that ran it; a
+//! compile also counts the whole process (naga runs on a thread of its own,
+//! `penumbra::scene::shading::stack`), see [`case_peak_all`].
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::sync::atomic::{AtomicIsize, Ordering};
 use std::time::Duration;
 
 /// A case slower than this (for an input under 1 MiB) is a hang.
@@ -77,7 +80,15 @@ thread_local! {
 /// The system allocator, counting this thread's live bytes and their peak.
 pub struct Counting;
 
+/// The process's live bytes, their peak since [`start_case`], and the live
+/// bytes then.
+static ALL_CURRENT: AtomicIsize = AtomicIsize::new(0);
+static ALL_PEAK: AtomicIsize = AtomicIsize::new(0);
+static ALL_START: AtomicIsize = AtomicIsize::new(0);
+
 fn add(delta: isize) {
+    let now = ALL_CURRENT.fetch_add(delta, Ordering::Relaxed) + delta;
+    ALL_PEAK.fetch_max(now, Ordering::Relaxed);
     // `try_with`: the allocator also runs while thread-locals are torn down.
     let _ = CURRENT.try_with(|c| {
         let now = c.get() + delta;
@@ -119,6 +130,17 @@ unsafe impl GlobalAlloc for Counting {
 pub fn start_case() {
     let now = CURRENT.with(Cell::get);
     PEAK.with(|p| p.set(now));
+    let all = ALL_CURRENT.load(Ordering::Relaxed);
+    ALL_START.store(all, Ordering::Relaxed);
+    ALL_PEAK.store(all, Ordering::Relaxed);
+}
+
+/// Bytes the whole process allocated at its peak since [`start_case`],
+/// beyond what it held then: for the compile targets, whose naga work runs
+/// on another thread (the worker runs one case at a time; its watchdog
+/// thread allocates next to nothing).
+pub fn case_peak_all() -> usize {
+    (ALL_PEAK.load(Ordering::Relaxed) - ALL_START.load(Ordering::Relaxed)).max(0) as usize
 }
 
 /// Bytes this thread allocated at its peak since [`start_case`], beyond what it held then.

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p penumbra-tools --bin fuzz -- [--cases N] [--seconds S] [--seed S]
-//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture] [--out DIR]
+//!     [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture,shader] [--out DIR]
 //! cargo run --release -p penumbra-tools --bin fuzz -- --replay FILE...
 //! cargo run --release -p penumbra-tools --bin fuzz -- --write-seeds DIR
 //! ```
@@ -52,7 +52,7 @@ struct Args {
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
     eprintln!(
-        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture] [--out DIR] | --replay FILE..."
+        "usage: fuzz [--cases N] [--seconds S] [--seed S] [--jobs J] [--targets json,gltf,glb,wgsl,exr,request,texture,shader] [--out DIR] | --replay FILE..."
     );
     std::process::exit(2)
 }
@@ -218,7 +218,7 @@ fn worker(args: &Args, id: usize) -> ExitCode {
     }
     let json_donors: Vec<serde_json::Value> = seeds
         .iter()
-        .filter(|s| s.target != Target::Wgsl)
+        .filter(|s| !s.target.compiles())
         .filter_map(|s| serde_json::from_slice(&s.data).ok())
         .collect();
     let byte_donors: Vec<Vec<u8>> = seeds.iter().map(|s| s.data.clone()).collect();
@@ -250,7 +250,7 @@ fn worker(args: &Args, id: usize) -> ExitCode {
             let _ = std::fs::write(&current, format!("{}\n", seed.target.ext()));
             last_target = Some(seed.target);
         }
-        if matches!(seed.target, Target::Wgsl | Target::Texture) {
+        if seed.target.compiles() || matches!(seed.target, Target::Texture) {
             let _ = std::fs::write(ws.case_path(seed.target), &data);
         }
         stuck.arm();
@@ -283,15 +283,16 @@ fn worker(args: &Args, id: usize) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// A seed: WGSL for one case in a hundred (a kernel compile costs about a
-/// hundred loader cases), else one of the scene seeds, each target equally often.
+/// A seed: WGSL (the kernel's or a user's shader file, equally often) for
+/// one case in a hundred (a compile costs about a hundred loader cases),
+/// else one of the scene seeds, each target equally often.
 fn pick_seed<'s>(seeds: &'s [seeds::Seed], rng: &mut Rng) -> &'s seeds::Seed {
-    let wgsl = seeds.iter().any(|s| s.target == Target::Wgsl);
-    let scenes = seeds.iter().any(|s| s.target != Target::Wgsl);
+    let wgsl = seeds.iter().any(|s| s.target.compiles());
+    let scenes = seeds.iter().any(|s| !s.target.compiles());
     let want_wgsl = wgsl && (!scenes || rng.one_in(100));
     let targets: Vec<Target> = Target::ALL
         .into_iter()
-        .filter(|&t| (t == Target::Wgsl) == want_wgsl)
+        .filter(|&t| t.compiles() == want_wgsl)
         .filter(|t| seeds.iter().any(|s| s.target == *t))
         .collect();
     let target = *rng.pick(&targets);
@@ -350,6 +351,9 @@ fn make_case(
 ) -> Vec<u8> {
     match seed.target {
         Target::Wgsl => mutate::mutate_wgsl(&String::from_utf8_lossy(&seed.data), rng).into_bytes(),
+        Target::Shader => {
+            mutate::mutate_shader(&String::from_utf8_lossy(&seed.data), rng).into_bytes()
+        }
         Target::Glb if rng.one_in(2) => {
             // Structure-aware on the JSON chunk, keeping the container valid.
             let mut data = seed.data.clone();

@@ -1,5 +1,6 @@
 //! Mutations: byte-level ones for any file, structure-aware ones on the JSON
-//! tree of glTF documents and JSON scenes, and token-level ones for WGSL.
+//! tree of glTF documents and JSON scenes, token-level ones for WGSL, and
+//! hostile snippets for user shader files.
 
 use serde_json::{Map, Value};
 
@@ -528,4 +529,81 @@ pub fn mutate_wgsl(text: &str, rng: &mut Rng) -> String {
         }
     }
     lines.join("\n")
+}
+
+/// Characters of more than one byte (two, three and four bytes, a
+/// zero-width space, a combining mark).
+const MULTIBYTE: &[&str] = &["é", "ß", "日本", "🦀", "\u{200b}", "e\u{301}", "\u{feff}"];
+
+/// A user shader file mutated: on half the cases the token-level mutations
+/// of [`mutate_wgsl`], then one to three hostile snippets at random lines:
+/// multibyte characters (in block or line comments, or bare, or at the end),
+/// comments opened or closed, deep nesting, long loops, big arrays, long
+/// sums, declared resources and overrides without a value.
+pub fn mutate_shader(text: &str, rng: &mut Rng) -> String {
+    let text = if rng.one_in(2) {
+        mutate_wgsl(text, rng)
+    } else {
+        text.to_string()
+    };
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    for _ in 0..1 + rng.below(3) {
+        let snippet = hostile_snippet(rng);
+        if rng.one_in(8) {
+            lines.push(snippet);
+        } else {
+            let i = rng.below(lines.len() + 1);
+            lines.insert(i, snippet);
+        }
+    }
+    let mut out = lines.join("\n");
+    if rng.one_in(4) {
+        // Ends without a line break, possibly inside a character's comment.
+        let comment: &&str = rng.pick(&["/* ", "// ", ""]);
+        let character: &&str = rng.pick(MULTIBYTE);
+        out.push_str(comment);
+        out.push_str(character);
+    }
+    out
+}
+
+/// One hostile line for [`mutate_shader`].
+fn hostile_snippet(rng: &mut Rng) -> String {
+    let multibyte = *rng.pick(MULTIBYTE);
+    let n = *rng.pick(&[1u64, 16, 31, 32, 33, 200, 2000]) as usize;
+    let count = *rng.pick(&[0u64, 1, 4096, 4097, 1_000_000, 100_000_000, 4_294_967_295]);
+    match rng.below(10) {
+        0 => format!("/* {multibyte} */"),
+        1 => format!("// {multibyte}{multibyte}"),
+        2 => format!("/* /* {multibyte} */ {multibyte}"),
+        3 => format!("{multibyte} */ {multibyte} /*"),
+        4 => {
+            let (open, close) = *rng.pick(&[("(", ")"), ("[", "]"), ("{", "}")]);
+            format!("    let x = {}1.0{};", open.repeat(n), close.repeat(n))
+        }
+        5 => (*rng.pick(&[
+            "    for (var i = 0u; i < 4294967295u; i++) { }",
+            "    loop { }",
+            "    while true { }",
+            "    for (var i = 0; i < 100000000; i++) { for (var j = 0; j < 100000000; j++) { } }",
+        ]))
+        .to_string(),
+        6 => format!(
+            "    {} a: array<f32, {count}>;",
+            rng.pick(&["var", "var<private>", "var<workgroup>", "let"])
+        ),
+        7 => format!(
+            "{} a{count}: array<vec4<f32>, {count}>;",
+            rng.pick(&["var<private>", "var<workgroup>"])
+        ),
+        8 => format!("    return {}s.normal;", "s.normal + ".repeat(n * 8)),
+        _ => (*rng.pick(&[
+            "@group(0) @binding(3) var<storage, read_write> counters: array<u32>;",
+            "override penumbra_gain: f32;",
+            "override gain: f32;",
+            "struct Params {}",
+            "    let d = dpdx(s.position.x);",
+        ]))
+        .to_string(),
+    }
 }

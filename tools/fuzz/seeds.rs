@@ -95,6 +95,7 @@ pub fn all() -> Vec<Seed> {
                 data,
             }),
     );
+    seeds.extend(shader_seeds(&r));
     // Tile 0 of 2; the harness merges each mutated copy with a valid tile 1.
     let (name, data) = part(0);
     seeds.push(Seed {
@@ -290,4 +291,33 @@ fn generated_scenes() -> Vec<Value> {
     ortho["camera"] = json!({"position": [0, 1, 5], "yaw": 10, "pitch": -5, "roll": 0,
         "projection": "orthographic", "half_height": 2, "width": 32, "height": 32});
     vec![all, ortho]
+}
+
+/// The user shader files of `scenes/shaders/`, and `toon.wgsl` with
+/// multibyte characters in a block comment, a line comment and at its end:
+/// the class that panicked the comment scan (issue 36) is in every case of
+/// that seed that keeps them, so CI's short run meets it.
+fn shader_seeds(root: &Path) -> Vec<Seed> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root.join("scenes/shaders"))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "wgsl"))
+        .collect();
+    files.sort();
+    let mut seeds: Vec<Seed> = files
+        .iter()
+        .filter_map(|p| file(Target::Shader, p))
+        .collect();
+    if let Some(toon) = seeds.iter().find(|s| s.name.ends_with("toon.wgsl")) {
+        let text = String::from_utf8_lossy(&toon.data);
+        let data = format!("/* Tön-Shader: 日本語 🦀 /* ß */ é */\n// ä ö ü\n{text}// ende ✓");
+        seeds.push(Seed {
+            target: Target::Shader,
+            name: "generated multibyte toon.wgsl".into(),
+            data: data.into_bytes(),
+        });
+    }
+    seeds
 }

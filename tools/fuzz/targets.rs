@@ -1,5 +1,6 @@
-//! What a case runs: the scene loaders on a file in the worker's folder, or
-//! the WGSL compiler on the kernel with one shading file replaced.
+//! What a case runs: the scene loaders on a file in the worker's folder, the
+//! WGSL compiler on the kernel with one shading file replaced, or a user's
+//! shader file through reflection, assembly, pruning and SPIR-V.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -7,7 +8,7 @@ use std::time::{Duration, Instant};
 use penumbra::loaders::{load_scene, LoadOptions};
 use penumbra::render::compile::{Assembled, ShaderSource};
 use penumbra::render::shade::ProgramFile;
-use penumbra::render::KernelOptions;
+use penumbra::render::{KernelOptions, StageKernel};
 use penumbra::scene::Features;
 
 use super::judge::{self, Verdict};
@@ -31,11 +32,15 @@ pub enum Target {
     /// An image (PNG, JPEG or OpenEXR bytes) through the texture loader
     /// under a small memory budget (module `texture`).
     Texture,
+    /// A user's shader file (`"type": "wgsl"`): reflection and the checks
+    /// before naga (`scene::shading`), the shade program's assembly, naga,
+    /// pruning and SPIR-V (`render::shade`, `render::compile`).
+    Shader,
 }
 
 impl Target {
     /// All targets.
-    pub const ALL: [Target; 7] = [
+    pub const ALL: [Target; 8] = [
         Target::Json,
         Target::Gltf,
         Target::Glb,
@@ -43,7 +48,13 @@ impl Target {
         Target::Part,
         Target::Request,
         Target::Texture,
+        Target::Shader,
     ];
+
+    /// Whether a case compiles WGSL (about a hundred loader cases' time).
+    pub fn compiles(self) -> bool {
+        matches!(self, Target::Wgsl | Target::Shader)
+    }
 
     /// The file extension (also the name on the command line).
     pub fn ext(self) -> &'static str {
@@ -55,6 +66,7 @@ impl Target {
             Target::Part => "exr",
             Target::Request => "request",
             Target::Texture => "texture",
+            Target::Shader => "shader",
         }
     }
 
@@ -152,7 +164,11 @@ impl Workspace {
             files.push((label.clone(), line, n));
             line += n;
         }
-        Assembled { text: out, files }
+        Assembled {
+            text: out,
+            files,
+            subject: None,
+        }
     }
 
     /// Runs one case and judges it. `name` is the seed's file name (for WGSL:
@@ -191,6 +207,31 @@ impl Workspace {
                     }
                     kernel
                         .compile_frame(&self.features, &KernelOptions::default())
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                });
+            }
+            Target::Shader => {
+                let text = String::from_utf8_lossy(data);
+                len = text.len();
+                let file = ProgramFile::User(self.case_path(target));
+                // Every feature the shade stage sees, textures included, so
+                // that pruning keeps the most code.
+                let key = StageKernel {
+                    features: penumbra::render::shade::variant(&Features {
+                        textures: true,
+                        ..self.features
+                    }),
+                    ..Default::default()
+                };
+                judge::start_case();
+                result = penumbra::panics::catch(|| {
+                    penumbra::render::shade::assemble(&ShaderSource::Embedded, &file, &text)
+                        .and_then(|source| {
+                            source
+                                .assembled
+                                .compile_entry(&key, penumbra::render::shade::SHADE_ENTRY_POINT)
+                        })
                         .map(|_| ())
                         .map_err(|e| e.to_string())
                 });
@@ -249,7 +290,10 @@ impl Workspace {
             }
         }
         let time = t0.elapsed();
-        let peak = judge::case_peak(start);
+        let peak = match target.compiles() {
+            true => judge::case_peak(start).max(judge::case_peak_all()),
+            false => judge::case_peak(start),
+        };
         // Messages name the case file; without its temporary folder they
         // are the same from run to run.
         let folder = format!("{}/", self.dir.display());

@@ -10,7 +10,12 @@
 
 pub mod blinn_phong;
 pub mod checker;
+pub mod footprint;
+pub mod lexer;
+pub mod limits;
 pub mod phong;
+pub mod scan;
+pub mod stack;
 pub mod wgsl;
 
 pub use checker::Checker;

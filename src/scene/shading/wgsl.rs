@@ -18,6 +18,9 @@ use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+use super::limits::{MAX_PARAMS_BYTES, MAX_PARAMS_FIELDS};
+use super::scan::floor_char_boundary;
+
 /// The engine's types a shader file is written against.
 pub const INTERFACE: &str = include_str!("../../../shaders/shading/interface.wgsl");
 
@@ -181,6 +184,9 @@ pub struct Reflection {
     pub has_ambient: bool,
     /// The file defines `fn prepare`.
     pub has_prepare: bool,
+    /// The bytes one invocation holds (variables, array and struct values;
+    /// [`super::footprint`]).
+    pub invocation_bytes: u64,
 }
 
 /// A place in a shader file, for an error message.
@@ -261,14 +267,6 @@ fn locate(source: &str, start: usize, end: usize) -> Location {
     }
 }
 
-/// The largest char boundary of `s` at or below `i`.
-fn floor_char_boundary(s: &str, mut i: usize) -> usize {
-    while i > 0 && !s.is_char_boundary(i) {
-        i -= 1;
-    }
-    i
-}
-
 /// One identifier of WGSL source outside comments: its text and byte range.
 struct Ident<'a> {
     text: &'a str,
@@ -277,50 +275,13 @@ struct Ident<'a> {
 
 /// The identifiers (and keywords) of `source`, skipping comments and numbers.
 fn identifiers(source: &str) -> Vec<Ident<'_>> {
-    let bytes = source.as_bytes();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < bytes.len() {
-        let rest = &source[i..];
-        if rest.starts_with("//") {
-            i += rest.find('\n').unwrap_or(rest.len());
-        } else if rest.starts_with("/*") {
-            // Block comments nest in WGSL.
-            let mut depth = 0usize;
-            while i < bytes.len() {
-                if source[i..].starts_with("/*") {
-                    depth += 1;
-                    i += 2;
-                } else if source[i..].starts_with("*/") {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
-        } else {
-            let c = rest.chars().next().unwrap_or(' ');
-            if c.is_alphanumeric() || c == '_' {
-                let len = rest
-                    .char_indices()
-                    .find(|&(_, c)| !(c.is_alphanumeric() || c == '_'))
-                    .map_or(rest.len(), |(k, _)| k);
-                if !c.is_ascii_digit() {
-                    out.push(Ident {
-                        text: &rest[..len],
-                        start: i,
-                    });
-                }
-                i += len;
-            } else {
-                i += c.len_utf8();
-            }
-        }
-    }
-    out
+    super::lexer::tokens(source)
+        .filter(|t| t.kind == super::lexer::Kind::Ident)
+        .map(|t| Ident {
+            text: t.text(source),
+            start: t.range.start,
+        })
+        .collect()
 }
 
 /// In the function declared at `range` of `source`: the byte ranges of its
@@ -426,6 +387,11 @@ fn type_name(module: &naga::Module, h: naga::Handle<naga::Type>) -> String {
             rows,
             scalar: s,
         } => format!("mat{}x{}<{}>", *columns as u8, *rows as u8, scalar(*s)),
+        naga::TypeInner::Array {
+            base,
+            size: naga::ArraySize::Constant(n),
+            ..
+        } => format!("array<{}, {n}>", type_name(module, *base)),
         naga::TypeInner::Array { base, .. } => format!("array<{}>", type_name(module, *base)),
         naga::TypeInner::Atomic(s) => format!("atomic<{}>", scalar(*s)),
         naga::TypeInner::Pointer { base, .. } => format!("ptr<{}>", type_name(module, *base)),
@@ -473,6 +439,10 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         message,
     };
     let at = |start: usize, end: usize| Some(locate(source, start, end));
+
+    // The limits and the declarations a file must not make, before any
+    // parse (super::scan).
+    super::scan::check(source).map_err(|r| err(at(r.range.start, r.range.end), r.message))?;
 
     // Names first, from the text: the parse would report a redefinition of
     // the engine's types in terms of the interface.
@@ -523,8 +493,8 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         text.push_str(PLACEHOLDER_PARAMS);
     }
 
-    let parsed = crate::panics::catch(|| naga::front::wgsl::parse_str(&text))
-        .map_err(|m| err(None, format!("the WGSL parser failed: {m}")))?;
+    let parsed = super::stack::on_parse_stack(|| naga::front::wgsl::parse_str(&text))
+        .map_err(|m| err(None, format!("internal error in naga's WGSL parser ({m})")))?;
     let module = parsed.map_err(|e| {
         let span = e.labels().next().and_then(|(s, _)| s.to_range());
         let place = span
@@ -539,6 +509,11 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
             .filter(|r| r.start >= offset && r.end <= offset + source.len())
             .map(|r| r.start - offset..r.end - offset)
     };
+
+    // What one invocation holds, before any further work on the module.
+    let invocation_bytes =
+        super::footprint::check(&module, source, user_range, |h| type_name(&module, h))
+            .map_err(|(r, message)| err(r.map(|r| locate(source, r.start, r.end)), message))?;
 
     let mut fields = Vec::new();
     if let Some(declared) = params_at {
@@ -574,6 +549,24 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
                         ));
                     };
                     fields.push(ParamField { name, ty });
+                    let bytes: usize = fields.iter().map(|f| 4 * f.ty.words()).sum();
+                    let limit = if fields.len() > MAX_PARAMS_FIELDS {
+                        Some(format!(
+                            "Params has more than {MAX_PARAMS_FIELDS} fields, the limit"
+                        ))
+                    } else if bytes > MAX_PARAMS_BYTES {
+                        Some(format!("Params takes {bytes} bytes up to field `{}`; its fields may take at most {MAX_PARAMS_BYTES} bytes (4 a word)", fields[fields.len() - 1].name))
+                    } else {
+                        None
+                    };
+                    if let Some(message) = limit {
+                        let place = whole.clone().map(|r| {
+                            let m = member_range(source, r.clone(), &fields[fields.len() - 1].name)
+                                .unwrap_or(r);
+                            locate(source, m.start, m.end)
+                        });
+                        return Err(err(place, message));
+                    }
                 }
             }
             // `Params` declared as an alias of another type, a constant...
@@ -679,12 +672,92 @@ pub fn reflect(path: &Path, source: &str) -> Result<Reflection, ShaderFileError>
         }
     }
 
+    validate(&module, &text, &user_range)
+        .map_err(|(r, message)| err(r.map(|r| locate(source, r.start, r.end)), message))?;
+
     Ok(Reflection {
         has_params,
         fields,
         has_ambient: ambient.is_some(),
         has_prepare: prepare.is_some(),
+        invocation_bytes,
     })
+}
+
+/// Validates the module of a shader file (the interface followed by the
+/// file) as the renderer will, so that its errors name the user's file and
+/// place: types that cannot be laid out, overrides without a value, and
+/// operations that the shade stage (a compute shader) cannot run. `user`
+/// maps a span of the module to a byte range of the user's file.
+fn validate(
+    module: &naga::Module,
+    text: &str,
+    user: &dyn Fn(naga::Span) -> Option<Range<usize>>,
+) -> Result<(), (Option<Range<usize>>, String)> {
+    // Overrides: the engine gives values only to its own.
+    for (h, o) in module.overrides.iter() {
+        let Some(at) = user(module.overrides.get_span(h)) else {
+            continue;
+        };
+        if o.init.is_none() {
+            return Err((
+                Some(at),
+                format!(
+                    "override `{}` has no value: the engine sets only its own overrides; give it a default (`= ...`) or make it a `const`",
+                    o.name.as_deref().unwrap_or("?")
+                ),
+            ));
+        }
+    }
+    let validated = super::stack::on_parse_stack(|| {
+        crate::render::compile::validator()
+            .validate(module)
+            .map_err(Box::new)
+    })
+    .map_err(|m| (None, format!("internal error in naga's validator ({m})")))?;
+    let info = validated.map_err(|e| {
+        let at = e.spans().find_map(|(span, _)| user(*span));
+        let at = at.or_else(|| {
+            // Without a span of the file, the place of what it names.
+            e.location(text)
+                .and_then(|l| user(naga::Span::new(l.offset, l.offset + l.length)))
+        });
+        (at, error_chain(e.as_inner()))
+    })?;
+    // The shade stage is a compute shader: every function of the file must
+    // be callable there. Callees come first in naga's arena, so the first
+    // such function is where the operation is.
+    for (h, f) in module.functions.iter() {
+        let Some(at) = user(module.functions.get_span(h)) else {
+            continue;
+        };
+        if !info[h]
+            .available_stages
+            .contains(naga::valid::ShaderStages::COMPUTE)
+        {
+            return Err((
+                Some(at),
+                format!(
+                    "`{}` uses an operation that the shade stage, a compute shader, cannot run (derivatives such as dpdx or fwidth, textureSample without an explicit level, discard)",
+                    f.name.as_deref().unwrap_or("?")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An error and its causes, outermost first, so that the author sees the
+/// reason and not only naga's outermost context.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
 }
 
 #[cfg(test)]
@@ -747,11 +820,11 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
         let r = reflect_str(src).unwrap();
         assert!(r.fields.is_empty() && !r.has_params);
         assert!(!r.has_ambient);
-        // naga parses an empty Params (WGSL proper requires a member): no
-        // fields, but declared (the engine must not add its placeholder).
-        let r = reflect_str(&format!("struct Params {{}}\n{src}")).unwrap();
-        assert!(r.has_params);
-        assert!(r.fields.is_empty());
+        // naga parses an empty Params, but WGSL requires a member: refused
+        // by the validation at the declaration.
+        let e = reflect_str(&format!("struct Params {{}}\n{src}")).unwrap_err();
+        assert!(e.message.contains("must have at least one member"), "{e}");
+        assert_eq!(e.at.map(|a| (a.line, a.column)), Some((1, 1)));
     }
 
     #[test]
@@ -889,6 +962,278 @@ fn ambient(s: Surface, light_ambient: vec3<f32>, p: Params) -> vec3<f32> {
         // In a comment the names are harmless.
         let src = "// struct Surface, penumbra_x\n/* fn penumbra_y /* nested */ */\nfn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> { return s.normal; }\n";
         reflect_str(src).unwrap();
+    }
+
+    /// A valid file with `body` as the statements of `shade` before its return.
+    fn with_body(body: &str) -> String {
+        format!("fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n{body}\n    return s.normal;\n}}\n")
+    }
+
+    /// The failing inputs of issue 36 (a multibyte character where the
+    /// comment scan sliced the text by bytes) and their relatives: each is
+    /// accepted, or refused with an error at a place counted in characters.
+    #[test]
+    fn multibyte_characters_do_not_panic() {
+        let shade = with_body("");
+        for ok in [
+            format!("/* é */\n{shade}"),
+            format!("/* 🦀 /* nested ü */ ß */\n{shade}"),
+            format!("// ä ö ü\n{shade}"),
+            format!("{shade}// ends in ä"),
+            format!("{shade}/* ends in é */"),
+            format!("@diagnostic(off, derivative_uniformity) /* ä */\n{shade}"),
+        ] {
+            reflect_str(&ok).unwrap_or_else(|e| panic!("{ok:?}: {e}"));
+        }
+        for (bad, line) in [
+            (format!("{shade}/* unterminated é"), 5),
+            (format!("{shade}é"), 5),
+            (format!("é{shade}"), 1),
+            (with_body("    let é = \"ü\";"), 2),
+            (with_body("    let x = 1.0; /* ä */ let y = ;"), 2),
+            (format!("{shade}\u{0}"), 5),
+        ] {
+            let e = reflect_str(&bad).unwrap_err();
+            let at = e.at.as_ref().unwrap_or_else(|| panic!("{bad:?}: {e}"));
+            assert_eq!(at.line, line, "{bad:?}: {e}");
+            let _ = e.to_string();
+        }
+        // The column counts characters: the `;` after two multibyte ones.
+        let e = reflect_str(&with_body("/*éé*/let x = ;")).unwrap_err();
+        let at = e.at.expect("a place");
+        assert_eq!((at.line, at.column), (2, 15), "{}", at.line_text);
+    }
+
+    /// Each limit refused before naga parses, naming line, column and value.
+    #[test]
+    fn limits_are_refused_with_their_place_and_value() {
+        use super::super::limits::*;
+        let cases: Vec<(String, (usize, usize), String)> = vec![
+            (
+                format!("{}\n{}", with_body(""), "// x\n".repeat(MAX_SOURCE_BYTES / 5)),
+                (13095, 4),
+                format!("at most {MAX_SOURCE_BYTES} bytes"),
+            ),
+            (
+                with_body(&format!("    let x = {}1.0{};", "(".repeat(2000), ")".repeat(2000))),
+                (2, 44),
+                format!("more than {MAX_NESTING} deep"),
+            ),
+            (
+                with_body(&format!("    return {};", vec!["a"; 30_000].join("+"))),
+                (2, 1035),
+                format!("more than {MAX_STATEMENT_TOKENS} tokens"),
+            ),
+            (
+                format!(
+                    "{}{}",
+                    (0..MAX_FUNCTIONS).map(|i| format!("fn f{i}() {{}}\n")).collect::<String>(),
+                    with_body("")
+                ),
+                (65, 1),
+                format!("more than {MAX_FUNCTIONS} functions"),
+            ),
+            (
+                with_body("    var a: array<f32, 100000000>;"),
+                (2, 5),
+                format!("400000000 bytes; a shader may hold at most {MAX_INVOCATION_BYTES} bytes"),
+            ),
+            (
+                format!("var<private> a: array<f32, 1000000>;\n{}", with_body("")),
+                (1, 1),
+                "array<f32, 1000000> takes 4000000 bytes".into(),
+            ),
+            (
+                with_body("    var a: array<f32, 3000>;\n    var b: array<f32, 3000>;"),
+                (3, 5),
+                format!("take 24000 bytes up to here; a shader may hold at most {MAX_INVOCATION_BYTES}"),
+            ),
+            (
+                format!(
+                    "const big = array<f32, 4096>();\n{}",
+                    with_body("    let a = big[u32(s.uv.x)];\n    let b = array<f32, 4096>();\n    let c = b[u32(s.uv.y)];")
+                ),
+                // `big` (16 384 bytes) and the arguments of `shade`.
+                (3, 13),
+                "array values take 16532 bytes up to here".into(),
+            ),
+            (
+                with_body("    let a = array<f32, 100000000>();"),
+                (2, 13),
+                "takes 400000000 bytes".into(),
+            ),
+            (
+                format!(
+                    "struct Params {{\n{}}}\n{}",
+                    (0..=MAX_PARAMS_FIELDS).map(|i| format!("f{i}: f32,\n")).collect::<String>(),
+                    with_body("")
+                ),
+                (66, 1),
+                format!("more than {MAX_PARAMS_FIELDS} fields"),
+            ),
+            (
+                format!(
+                    "struct Params {{\n{}}}\n{}",
+                    (0..40).map(|i| format!("f{i}: vec4<f32>,\n")).collect::<String>(),
+                    with_body("")
+                ),
+                (34, 1),
+                format!("528 bytes up to field `f32`; its fields may take at most {MAX_PARAMS_BYTES} bytes"),
+            ),
+        ];
+        let mut wrong = Vec::new();
+        for (source, (line, column), message) in cases {
+            let e = reflect_str(&source).unwrap_err();
+            let place = e.at.as_ref().map(|at| (at.line, at.column));
+            if !e.message.contains(&message) || place != Some((line, column)) {
+                wrong.push(format!(
+                    "{message:?} at {line}:{column}, got {place:?}: {}",
+                    e.message
+                ));
+            }
+        }
+        assert!(wrong.is_empty(), "{wrong:#?}");
+    }
+
+    /// Resources, workgroup memory, overrides without a value and
+    /// operations a compute shader cannot run: refused at their place.
+    #[test]
+    fn what_a_file_must_not_declare_or_use() {
+        for (source, line, message) in [
+            (
+                format!(
+                    "@group(0) @binding(3) var<storage, read_write> counters: array<u32>;\n{}",
+                    with_body("")
+                ),
+                1,
+                "`@group`: a shader file must not declare resources",
+            ),
+            (
+                format!("var<workgroup> w: array<f32, 64>;\n{}", with_body("")),
+                1,
+                "`var<workgroup>`",
+            ),
+            (
+                format!("override gain: f32;\n{}", with_body("    let g = gain;")),
+                1,
+                "override `gain` has no value",
+            ),
+            (
+                with_body("    let d = dpdx(s.position.x);"),
+                1,
+                "`shade` uses an operation that the shade stage, a compute shader, cannot run",
+            ),
+            (with_body("    let x: u32 = 1.5;"), 2, ""),
+        ] {
+            let e = reflect_str(&source).unwrap_err();
+            assert!(
+                e.message.contains(message),
+                "{message:?} not in: {}",
+                e.message
+            );
+            assert_eq!(e.at.as_ref().map(|a| a.line), Some(line), "{e}");
+        }
+        // An override with a default is the file's own business.
+        reflect_str(&format!(
+            "override gain: f32 = 2.0;\n{}",
+            with_body("    let g = gain;")
+        ))
+        .unwrap();
+    }
+
+    /// The limits are far above what the project's own shader files need:
+    /// each file's size, nesting, longest statement and functions, against
+    /// the limits with at least the margin that scenes/README.md states.
+    #[test]
+    fn the_project_shaders_are_far_inside_the_limits() {
+        use super::super::lexer::{tokens, Kind};
+        use super::super::limits::*;
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut files = Vec::new();
+        for dir in ["shaders/shading", "scenes/shaders"] {
+            for e in std::fs::read_dir(root.join(dir)).unwrap() {
+                let p = e.unwrap().path();
+                if p.extension().is_some_and(|x| x == "wgsl") && !p.ends_with("interface.wgsl") {
+                    files.push(p);
+                }
+            }
+        }
+        let (mut bytes, mut depth, mut statement, mut functions) = (0, 0, 0, 0);
+        let mut held = 0;
+        for p in &files {
+            let text = std::fs::read_to_string(p).unwrap();
+            match reflect(p, &text) {
+                Ok(r) => held = held.max(r.invocation_bytes),
+                // checker.wgsl and shader.wgsl are engine files, not shade programs.
+                Err(e) => assert!(!p.starts_with(root.join("scenes")), "{e}"),
+            }
+            bytes = bytes.max(text.len());
+            let (mut d, mut n, mut f) = (0usize, 0usize, 0usize);
+            for t in tokens(&text) {
+                n += 1;
+                statement = statement.max(n);
+                match t.kind {
+                    Kind::Punct('(' | '[' | '{') => {
+                        d += 1;
+                        depth = depth.max(d);
+                    }
+                    Kind::Punct(')' | ']' | '}') => d = d.saturating_sub(1),
+                    Kind::Ident if t.text(&text) == "fn" => f += 1,
+                    _ => {}
+                }
+                if matches!(t.kind, Kind::Punct(';' | '{' | '}' | ',')) {
+                    n = 0;
+                }
+            }
+            functions = functions.max(f);
+        }
+        eprintln!("largest {bytes} bytes, nesting {depth}, statement {statement} tokens, {functions} functions, {held} bytes an invocation");
+        assert!(held * 10 <= MAX_INVOCATION_BYTES, "{held}");
+        assert!(bytes * 10 <= MAX_SOURCE_BYTES, "{bytes}");
+        assert!(depth * 5 <= MAX_NESTING, "{depth}");
+        assert!(statement * 10 <= MAX_STATEMENT_TOKENS, "{statement}");
+        assert!(functions * 10 <= MAX_FUNCTIONS, "{functions}");
+    }
+
+    /// naga's recursion on the worst file within the limits fits in an
+    /// eighth of the parse thread's stack, and `reflect` works from a
+    /// caller with a small stack (it parses on a thread of its own).
+    #[test]
+    fn the_worst_file_within_the_limits_fits_the_stack() {
+        use super::super::limits::*;
+        let open = MAX_NESTING - 3;
+        // `s.normal.x -`: six tokens a term; `return vec3<f32>(` ... `);` eight more.
+        let terms = (MAX_STATEMENT_TOKENS - 2 * open - 8) / 6;
+        let sum = vec!["s.normal.x"; terms].join(" - ");
+        let body = format!(
+            "    return vec3<f32>({}{sum}{});",
+            "(".repeat(open),
+            ")".repeat(open)
+        );
+        let source = format!(
+            "fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {{\n{body}\n}}\n"
+        );
+        super::super::scan::check(&source).unwrap();
+        let text = format!("{TEXTURES}\n{INTERFACE}\n{PLACEHOLDER_PARAMS}{source}");
+        let parsed = std::thread::Builder::new()
+            .stack_size(PARSE_STACK_BYTES / 8)
+            .spawn(move || {
+                naga::front::wgsl::parse_str(&text)
+                    .map(|_| ())
+                    .map_err(|e| e.message().to_string())
+            })
+            .unwrap()
+            .join()
+            .expect("no overflow");
+        // Parsed and lowered: the whole recursion ran.
+        parsed.unwrap();
+        let small = std::thread::Builder::new()
+            .stack_size(256 * 1024)
+            .spawn(move || reflect(Path::new("deep.wgsl"), &source).map(|_| ()))
+            .unwrap()
+            .join()
+            .expect("no overflow");
+        small.unwrap();
     }
 
     #[test]
