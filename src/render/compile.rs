@@ -705,14 +705,17 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 /// the encoder; naga's clamp would cost lavapipe an image-size call per
 /// fetch). The shade stage runs a user's shader file, whose values (a
 /// texture index given to `texture_sample`) reach the engine's buffers and
-/// texel images, so there naga clamps every buffer index and texel
-/// coordinate into range (`Restrict`; naga sets the policy per module, so
-/// the shade stage's own accesses pay too: docs/shaders.md has the cost).
-/// Local arrays keep naga's clamping everywhere.
+/// texel images, so there naga checks every buffer index and texel
+/// coordinate: an access out of range reads zero and writes nothing
+/// (`ReadZeroSkipWrite`; `Restrict` would clamp a write into the last
+/// element, and an image band's last pixel then collects the writes of
+/// rows outside the band). naga sets the policy per module, so the shade
+/// stage's own accesses pay too: docs/shaders.md has the cost. Local arrays
+/// keep naga's clamping everywhere.
 fn spirv_options(user_code: bool) -> naga::back::spv::Options<'static> {
     use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
     let engine = if user_code {
-        BoundsCheckPolicy::Restrict
+        BoundsCheckPolicy::ReadZeroSkipWrite
     } else {
         BoundsCheckPolicy::Unchecked
     };

@@ -225,3 +225,96 @@ fn get(addr: &str, path: &str) -> Vec<u8> {
     assert!(head.starts_with("HTTP/1.1 200"), "{head}");
     bytes.split_off(head_end)
 }
+
+/// A scene of one sphere shaded by the user's `user.wgsl` (Params `weight`),
+/// 64×48, written over the fixture's scene.
+fn user_shader_scene(fx: &Fixture, source: &str) -> std::path::PathBuf {
+    let scene = r#"{
+      "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 64, "height": 48},
+      "shaders": {"user": {"type": "wgsl", "file": "user.wgsl", "params": {"weight": 1}}},
+      "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "user"}],
+      "lights": [{"type": "point", "position": [2, 2, 3], "intensity": 10}]
+    }"#;
+    let shader = fx.dir.path().join("user.wgsl");
+    std::fs::write(&shader, source).unwrap();
+    std::fs::write(&fx.scene, scene).unwrap();
+    shader
+}
+
+#[test]
+fn watch_survives_hostile_shaders_saved_into_it() {
+    let fx = Fixture::new();
+    let normals = include_str!("../../scenes/shaders/normals.wgsl");
+    let shader = user_shader_scene(&fx, normals);
+    let mut p = Child::start(&fx, &["--debounce-ms", "40", "--time-limit", "2"]);
+    p.wait_line("the first render", false, |l| {
+        l.starts_with("reload 0: start")
+    });
+
+    // A multibyte character in a comment is just a comment.
+    let commented = format!("/* é ✓ 日本 — */\n{normals}// ü\n");
+    save_by_rename(&shader, &commented);
+    let line = p.wait_line("reload 1", false, |l| l.starts_with("reload 1:"));
+    assert!(
+        line.contains("full 64x48") && !line.contains("ERROR"),
+        "{line}"
+    );
+    let good = fx.output();
+
+    // Each refused with the file and place; the last good image is kept.
+    let sum: String = (0..30000)
+        .map(|i| format!("{i}.0"))
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let hostile = [
+        (
+            "a huge array",
+            normals.replace(
+                "return vec3<f32>(0.0);",
+                "var a: array<f32, 100000000>;\n    a[u32(s.normal.x)] = 1.0;\n    return vec3<f32>(a[1]);",
+            ),
+        ),
+        (
+            "a deep expression",
+            normals.replace("return vec3<f32>(0.0);", &format!("return vec3<f32>({sum});")),
+        ),
+    ];
+    let name = shader.canonicalize().unwrap().display().to_string();
+    for (n, (what, source)) in hostile.iter().enumerate() {
+        assert_ne!(source, normals, "{what}: the edit applies");
+        save_by_rename(&shader, source);
+        let error = p.wait_line(what, true, |l| l.starts_with("error: "));
+        assert!(
+            error.contains(&format!("{name}:")),
+            "{what}: names the file: {error}"
+        );
+        let number = n + 2;
+        let line = p.wait_line(what, false, |l| l.starts_with(&format!("reload {number}:")));
+        assert!(
+            line.contains("ERROR: kept the last good image"),
+            "{what}: {line}"
+        );
+        assert_eq!(fx.output(), good, "{what}: the last good image is kept");
+    }
+
+    // A loop that never ends: reported, and watch restarts.
+    save_by_rename(&shader, &never_ending(normals, "weight"));
+    let error = p.wait_line("the time-out", true, |l| {
+        l.contains("ran past the time limit of 2 s")
+    });
+    assert!(error.contains(&name), "names the file: {error}");
+    p.wait_line("the restart", false, |l| l.starts_with("reload 5: restart"));
+    assert_eq!(fx.output(), good, "the last good image is kept");
+
+    // The next good save renders.
+    save_by_rename(&shader, &normals.replace("p.weight *", "0.5 * p.weight *"));
+    let line = p.wait_line("recovery", false, |l| l.starts_with("reload 6:"));
+    assert!(
+        line.contains("full 64x48") && !line.contains("ERROR"),
+        "{line}"
+    );
+    assert_ne!(fx.output(), good, "a new image");
+
+    let took = interrupt(&mut p.child);
+    assert!(took < Duration::from_secs(1), "SIGINT took {took:?}");
+}
