@@ -381,8 +381,9 @@ struct LimitArgs {
     /// (after resolving `..` and symbolic links): for untrusted scenes.
     #[arg(long)]
     restrict_paths: bool,
-    /// Most memory, in MiB, that the scene's files and loaded geometry may take;
-    /// checked before anything is expanded.
+    /// Most memory, in MiB, that the scene's files, its loaded geometry and its
+    /// textures (decoded and uploaded) may take; checked before anything is
+    /// expanded or decoded.
     #[arg(long, value_name = "MIB", default_value_t = loaders::guard::DEFAULT_MAX_SCENE_BYTES >> 20,
           value_parser = clap::value_parser!(u64).range(1..=1 << 30))]
     max_scene_memory: u64,
@@ -801,7 +802,7 @@ fn render_batch(
             e.scene.display(),
             e.output.display()
         ),
-        Outcome::Failed(m) => eprintln!("failed: {m}"),
+        Outcome::Failed(m) => eprintln!("failed: {}", terminal::diagnostic(m)),
     });
     let failed: Vec<String> = results
         .iter()
@@ -812,15 +813,29 @@ fn render_batch(
         .iter()
         .filter(|(_, o)| matches!(o, Outcome::Skipped))
         .count();
+    let rendered = results.len() - skipped - failed.len();
     println!(
-        "batch {}: {} scenes, {} rendered, {} skipped, {} failed in {}",
+        "batch {}: {} scenes, {} rendered, {} skipped, {} failed, {} not started in {}",
         list.display(),
         total,
-        total - skipped - failed.len(),
+        rendered,
         skipped,
         failed.len(),
+        total - results.len(),
         ms(t0.elapsed())
     );
+    if renderer.is_hung() {
+        // The device still runs the shader that did not end: no exit handler
+        // may wait for it.
+        let last = failed.last().cloned().unwrap_or_default();
+        eprintln!(
+            "error: {}: {} ran past --time-limit; the device cannot stop it, so {} scene(s) after it were not started (a rerun resumes)",
+            terminal::escape(&list.display().to_string()),
+            terminal::escape(&last),
+            total - results.len()
+        );
+        exit_leaving_the_device(1);
+    }
     if !failed.is_empty() {
         anyhow::bail!(
             "{}: {} of {total} scenes failed: {}",

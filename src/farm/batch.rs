@@ -162,7 +162,10 @@ fn scene_error(scene: &Path, e: crate::render::RenderError) -> anyhow::Error {
 }
 
 /// Renders every entry in order, skipping complete outputs; `report` hears
-/// of each entry as it is done. A failed scene does not stop the others.
+/// of each entry as it is done. A failed scene does not stop the others,
+/// except one that hangs the device (a shader past the time limit): nothing
+/// more can render on it, so the batch ends there (a rerun resumes after the
+/// complete outputs).
 pub fn run(
     renderer: &mut Renderer,
     entries: &[Entry],
@@ -187,6 +190,9 @@ pub fn run(
         };
         report(e, &outcome);
         done.push((e.clone(), outcome));
+        if renderer.is_hung() {
+            break;
+        }
     }
     done
 }

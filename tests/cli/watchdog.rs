@@ -318,3 +318,58 @@ fn watch_survives_hostile_shaders_saved_into_it() {
     let took = interrupt(&mut p.child);
     assert!(took < Duration::from_secs(1), "SIGINT took {took:?}");
 }
+
+#[test]
+fn a_batch_ends_at_a_scene_that_hangs_the_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let normals = include_str!("../../scenes/shaders/normals.wgsl");
+    std::fs::write(dir.path().join("good.wgsl"), normals).unwrap();
+    std::fs::write(
+        dir.path().join("spin.wgsl"),
+        never_ending(normals, "weight"),
+    )
+    .unwrap();
+    for (scene, shader) in [
+        ("a.json", "good.wgsl"),
+        ("b.json", "spin.wgsl"),
+        ("c.json", "good.wgsl"),
+    ] {
+        let text = format!(
+            r#"{{
+          "camera": {{"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 32, "height": 24}},
+          "shaders": {{"u": {{"type": "wgsl", "file": "{shader}", "params": {{"weight": 1}}}}}},
+          "objects": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "u"}}],
+          "lights": [{{"type": "point", "position": [2, 2, 3], "intensity": 10}}]
+        }}"#
+        );
+        std::fs::write(dir.path().join(scene), text).unwrap();
+    }
+    std::fs::write(dir.path().join("list.txt"), "a.json\nb.json\nc.json\n").unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let result = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render", "--batch"])
+        .arg(dir.path().join("list.txt"))
+        .arg("-o")
+        .arg(&out)
+        .args(["--time-limit", "1"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("spin.wgsl: the shade stage ran past the time limit of 1 s"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("1 scene(s) after it were not started"),
+        "{stderr}"
+    );
+    assert!(
+        stdout.contains("3 scenes, 1 rendered, 0 skipped, 1 failed, 1 not started"),
+        "{stdout}"
+    );
+    assert!(out.join("a.png").exists());
+    assert!(!out.join("b.png").exists() && !out.join("c.png").exists());
+}
