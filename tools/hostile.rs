@@ -39,6 +39,9 @@ struct Outcome {
 
 /// Runs `cmd` to its end (or kills it after `kill_after`), reading stderr,
 /// and takes its peak resident memory from wait4.
+// The child is reaped by wait4 (which also gives its rusage), not by
+// `Child::wait`.
+#[allow(clippy::zombie_processes)]
 fn run(mut cmd: Command, kill_after: Duration) -> Outcome {
     let t = Instant::now();
     let child = cmd
