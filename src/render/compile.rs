@@ -699,22 +699,25 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 }
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we
-/// request, and no debug info. The engine's stages (`user_code` false) have
-/// no bounds checks of naga's own on buffers (every index is bounded by the
-/// counts in `Globals`) or texel fetches (every BVH record index comes from
-/// the encoder; naga's clamp would cost lavapipe an image-size call per
-/// fetch). The shade stage runs a user's shader file, whose values (a
-/// texture index given to `texture_sample`) reach the engine's buffers and
-/// texel images, so there naga checks every buffer index and texel
-/// coordinate: an access out of range reads zero and writes nothing
-/// (`ReadZeroSkipWrite`; `Restrict` would clamp a write into the last
-/// element, and an image band's last pixel then collects the writes of
-/// rows outside the band). naga sets the policy per module, so the shade
-/// stage's own accesses pay too: docs/shaders.md has the cost. Local arrays
-/// keep naga's clamping everywhere.
+/// request, and no debug info. Local arrays (a user's included) are clamped
+/// into range everywhere (`index: Restrict`). The engine's buffers are not
+/// checked by naga: every index is bounded by the counts in `Globals`, and a
+/// user's file cannot name them (names starting with `penumbra_` are
+/// refused, and so are declared resources). A user's values reach the
+/// engine's resources only through the interface's texture functions, whose
+/// texture index selects a record of the texel image of texture uses; so
+/// the shade stage (`user_code`) checks its texel loads: one out of range
+/// reads zero (`ReadZeroSkipWrite`; a zero record then samples nothing out
+/// of range), one image-size query per fetch (docs/shaders.md has the cost).
+/// The other stages' fetches stay unchecked (every BVH record index comes
+/// from the encoder; the check would cost lavapipe an image-size call per
+/// fetch). Buffers are unchecked in every stage: checks there also cost the
+/// shade stage's compile a third more on every edit (bench_reload), and
+/// `Restrict` clamped the engine's stores of rows outside an image band
+/// into the band's last pixel.
 fn spirv_options(user_code: bool) -> naga::back::spv::Options<'static> {
     use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy};
-    let engine = if user_code {
+    let texels = if user_code {
         BoundsCheckPolicy::ReadZeroSkipWrite
     } else {
         BoundsCheckPolicy::Unchecked
@@ -724,8 +727,8 @@ fn spirv_options(user_code: bool) -> naga::back::spv::Options<'static> {
         flags: naga::back::spv::WriterFlags::empty(),
         bounds_check_policies: BoundsCheckPolicies {
             index: BoundsCheckPolicy::Restrict,
-            buffer: engine,
-            image_load: engine,
+            buffer: BoundsCheckPolicy::Unchecked,
+            image_load: texels,
             binding_array: BoundsCheckPolicy::Restrict,
         },
         ..Default::default()

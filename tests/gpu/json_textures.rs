@@ -369,3 +369,39 @@ fn watch_replaces_an_edited_texture_without_reloading_the_scene() {
     );
     assert_output_shows(&fx.out, &last);
 }
+
+/// A user's texture index out of range (issue 36: user code touches only
+/// what the interface gives it): the shade stage's texel loads are
+/// bounds-checked, so indices past the texture table read a zero record and
+/// the render completes with finite colours.
+#[test]
+fn a_texture_index_out_of_range_reads_nothing_out_of_range() {
+    const WILD: &str = "struct Params { t: u32, }
+fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
+    let far = texture_at(p.t + 123456789u, s).rgb + texture_at(0xfffffffeu, s).rgb;
+    return texture_at(p.t, s).rgb + 1e-3 * far;
+}
+";
+    let json = format!(
+        r#"{{
+  "camera": {{ "position": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
+              "projection": "orthographic", "half_height": {HALF}, "width": {N}, "height": {N} }},
+  "shaders": {{
+    "ground": {{ "type": "wgsl", "file": "wild.wgsl",
+                "params": {{ "t": {{ "texture": "data.png", "filter": "nearest" }} }} }}
+  }},
+  "objects": [ {{ "type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "ground" }} ],
+  "lights": [ {{ "type": "directional", "direction": [0, -1, 0] }} ]
+}}"#
+    );
+    let (dir, path) = support::write_scene(&json);
+    std::fs::write(dir.path().join("data.png"), png(&texels(4, 4, 5))).unwrap();
+    std::fs::write(dir.path().join("wild.wgsl"), WILD).unwrap();
+    let frame = support::render(&support::load(&path));
+    assert!(frame
+        .image
+        .pixels
+        .iter()
+        .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+    assert!(frame.image.pixels.iter().any(|p| p[0] > 0.0));
+}
