@@ -355,9 +355,12 @@ impl Assembled {
         } else {
             self.parse()?
         };
-        let info = validator()
-            .validate(&module)
-            .map_err(|e| self.error_at(e.location(&self.text), error_chain(e.as_inner())))?;
+        let info = validator().validate(&module).map_err(|e| {
+            self.error_at(
+                e.location(&self.text),
+                crate::scene::shading::wgsl::error_chain(e.as_inner()),
+            )
+        })?;
         self.check_bindings(&module)?;
         let mut constants = naga::back::PipelineConstants::default();
         if !kernel.text_specialise {
@@ -682,20 +685,6 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
         ("HAS_NORMAL_MAPS", f.normal_maps),
         ("HAS_ALPHA_TESTS", f.alpha_tests),
     ]
-}
-
-/// An error and its causes, outermost first ("entry point render is
-/// invalid: …: the real reason"), so a shader author sees the reason and
-/// not only naga's outermost context.
-fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        text.push_str(": ");
-        text.push_str(&c.to_string());
-        cause = c.source();
-    }
-    text
 }
 
 /// Explicit SPIR-V writer settings: SPIR-V 1.3 to match the Vulkan 1.1 we

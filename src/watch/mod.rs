@@ -256,8 +256,6 @@ struct Watch {
     /// Files that hung the device before a restart, not rendered again
     /// until one of them changes.
     quarantine: Option<restart::Quarantine>,
-    /// The last reload's errors (for [`Watch::hung`]).
-    last_errors: Vec<String>,
     /// The live page's bound address.
     serving: Option<SocketAddr>,
     /// The live page's server, kept running as long as the loop.
@@ -346,7 +344,6 @@ impl Watch {
             announced: false,
             loaded: false,
             quarantine,
-            last_errors: Vec::new(),
             serving,
             _server: server,
         })
@@ -360,12 +357,10 @@ impl Watch {
         }
         let files = hashed_files(&self.session, &self.shader_files);
         let error = self
-            .last_errors
-            .iter()
-            .find(|e| e.contains("--time-limit") || e.contains("time limit"))
-            .or(self.last_errors.first())
-            .cloned()
-            .unwrap_or_else(|| "the device ran past the time limit".into());
+            .session
+            .timed_out()
+            .unwrap_or("the device ran past the time limit")
+            .to_string();
         Some(restart::Restart {
             quarantine: restart::Quarantine {
                 snapshot: restart::snapshot(&files),
@@ -492,7 +487,6 @@ impl Watch {
             let current = (!current.is_empty()).then(|| current.join("\n\n"));
             live.set_status(current, reload.line.clone());
         }
-        self.last_errors = reload.errors.clone();
         let _ = self.events.send(Event::Reload(reload));
         self.number += 1;
     }

@@ -128,6 +128,9 @@ pub struct Session {
     pub shader_error: Option<String>,
     /// The scene on disk does not load (the last good upload is in use).
     pub scene_error: Option<String>,
+    /// The error of a time-out, once one hung the device
+    /// ([`RenderError::is_timeout`]): what `watch` carries over its restart.
+    timed_out: Option<String>,
 }
 
 impl Session {
@@ -146,6 +149,7 @@ impl Session {
             texture_errors: BTreeMap::new(),
             shader_error: None,
             scene_error: None,
+            timed_out: None,
         }
     }
 
@@ -153,6 +157,19 @@ impl Session {
     /// cannot be stopped ([`crate::render::Renderer::is_hung`]).
     pub fn is_hung(&self) -> bool {
         self.renderer.is_hung()
+    }
+
+    /// The message of the time-out that hung the device, if one did.
+    pub fn timed_out(&self) -> Option<&str> {
+        self.timed_out.as_deref()
+    }
+
+    /// Keeps `message` if `e` is the time-out that hung the device (the
+    /// first one: every later submission fails the same way).
+    fn note_timeout(&mut self, e: &RenderError, message: &str) {
+        if e.is_timeout() && self.timed_out.is_none() {
+            self.timed_out = Some(message.to_string());
+        }
     }
 
     /// The files the last good scene read (the scene file alone before the
@@ -260,6 +277,7 @@ impl Session {
                     continue;
                 }
                 Err(e) => {
+                    self.note_timeout(&e, &e.to_string());
                     self.shader_error = Some(e.to_string());
                     // A scene edit still renders, with the last good
                     // pipelines; a shader edit has nothing new to show.
@@ -337,7 +355,11 @@ impl Session {
         let result = match loaders::load_scene(&self.scene_path, &self.load) {
             Err(e) => Err(format!("scene error: {e}")),
             Ok(loaded) => match self.renderer.upload(&loaded.scene) {
-                Err(e) => Err(format!("{}: {e}", self.scene_path.display())),
+                Err(e) => {
+                    let msg = format!("{}: {e}", self.scene_path.display());
+                    self.note_timeout(&e, &msg);
+                    Err(msg)
+                }
                 Ok(up) => Ok((loaded, up)),
             },
         };
@@ -427,7 +449,11 @@ impl Session {
                     self.shader_error = Some(msg.clone());
                     return Err(msg);
                 }
-                Err(e) => return Err(format!("render error: {e}")),
+                Err(e) => {
+                    let msg = format!("render error: {e}");
+                    self.note_timeout(&e, &msg);
+                    return Err(msg);
+                }
             }
         }
         Ok(false)

@@ -40,18 +40,26 @@ fn interrupt(child: &mut std::process::Child) -> Duration {
     }
 }
 
+/// A scene of one lit sphere, `width`×`height`, shaded by the user's shader
+/// file `file` (relative to the scene; `Params { weight }`).
+fn sphere_scene(file: &str, width: u32, height: u32) -> String {
+    format!(
+        r#"{{
+      "camera": {{"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": {width}, "height": {height}}},
+      "shaders": {{"user": {{"type": "wgsl", "file": "{file}", "params": {{"weight": 1}}}}}},
+      "objects": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "user"}}],
+      "lights": [{{"type": "point", "position": [2, 2, 3], "intensity": 10}}]
+    }}"#
+    )
+}
+
 #[test]
 fn render_stops_a_shader_that_never_ends_and_names_its_file() {
     let dir = tempfile::tempdir().unwrap();
     let shader = dir.path().join("spin.wgsl");
     let normals = include_str!("../../scenes/shaders/normals.wgsl");
     std::fs::write(&shader, never_ending(normals, "weight")).unwrap();
-    let scene = r#"{
-      "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 32, "height": 24},
-      "shaders": {"spin": {"type": "wgsl", "file": "spin.wgsl", "params": {"weight": 1}}},
-      "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "spin"}],
-      "lights": [{"type": "point", "position": [2, 2, 3], "intensity": 10}]
-    }"#;
+    let scene = sphere_scene("spin.wgsl", 32, 24);
     std::fs::write(dir.path().join("scene.json"), scene).unwrap();
     let out_dir = dir.path().join("out");
     std::fs::create_dir(&out_dir).unwrap();
@@ -229,12 +237,7 @@ fn get(addr: &str, path: &str) -> Vec<u8> {
 /// A scene of one sphere shaded by the user's `user.wgsl` (Params `weight`),
 /// 64×48, written over the fixture's scene.
 fn user_shader_scene(fx: &Fixture, source: &str) -> std::path::PathBuf {
-    let scene = r#"{
-      "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 64, "height": 48},
-      "shaders": {"user": {"type": "wgsl", "file": "user.wgsl", "params": {"weight": 1}}},
-      "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "user"}],
-      "lights": [{"type": "point", "position": [2, 2, 3], "intensity": 10}]
-    }"#;
+    let scene = sphere_scene("user.wgsl", 64, 48);
     let shader = fx.dir.path().join("user.wgsl");
     std::fs::write(&shader, source).unwrap();
     std::fs::write(&fx.scene, scene).unwrap();
@@ -334,14 +337,7 @@ fn a_batch_ends_at_a_scene_that_hangs_the_device() {
         ("b.json", "spin.wgsl"),
         ("c.json", "good.wgsl"),
     ] {
-        let text = format!(
-            r#"{{
-          "camera": {{"position": [0, 0, 4], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 32, "height": 24}},
-          "shaders": {{"u": {{"type": "wgsl", "file": "{shader}", "params": {{"weight": 1}}}}}},
-          "objects": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "shader": "u"}}],
-          "lights": [{{"type": "point", "position": [2, 2, 3], "intensity": 10}}]
-        }}"#
-        );
+        let text = sphere_scene(shader, 32, 24);
         std::fs::write(dir.path().join(scene), text).unwrap();
     }
     std::fs::write(dir.path().join("list.txt"), "a.json\nb.json\nc.json\n").unwrap();

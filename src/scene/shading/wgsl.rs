@@ -747,9 +747,11 @@ fn validate(
     Ok(())
 }
 
-/// An error and its causes, outermost first, so that the author sees the
-/// reason and not only naga's outermost context.
-fn error_chain(e: &dyn std::error::Error) -> String {
+/// An error and its causes, outermost first ("entry point render is
+/// invalid: …: the real reason"), so that the author sees the reason and not
+/// only naga's outermost context. Also the shade program's compile errors
+/// (`render::compile`).
+pub(crate) fn error_chain(e: &dyn std::error::Error) -> String {
     let mut text = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {
