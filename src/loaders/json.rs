@@ -13,9 +13,10 @@ use serde::Deserialize;
 use super::{LoadOptions, Loaded};
 use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::scene::{
-    Camera, Checker, Filter, Light, LightKind, Object, ParamField, ParamType, ParamValue, Phong,
-    PhongTextures, Plane, Projection, Sampler, Scene, Shader, ShaderId, Shape, Sphere, Texture,
-    TextureId, TextureRef, Triangle, UvTransform, WgslShader, Wrap,
+    Camera, Checker, Filter, Light, LightKind, MetallicRoughness, MetallicRoughnessTextures,
+    Object, ParamField, ParamType, ParamValue, Phong, PhongTextures, Plane, Projection, Sampler,
+    Scene, Shader, ShaderId, Shape, Sphere, Texture, TextureId, TextureRef, Triangle, UvTransform,
+    WgslShader, Wrap,
 };
 use crate::SceneError;
 
@@ -69,6 +70,7 @@ enum ProjectionKind {
 enum ShaderKind {
     Phong,
     BlinnPhong,
+    MetallicRoughness,
     Checker,
     Wgsl,
 }
@@ -85,6 +87,12 @@ struct ShaderFile {
     /// As `ambient`.
     specular: Option<serde_json::Value>,
     shininess: Option<f32>,
+    /// `[r, g, b]` or a texture object (metallic_roughness).
+    base_colour: Option<serde_json::Value>,
+    metallic: Option<f32>,
+    roughness: Option<f32>,
+    /// A texture object: B scales metallic, G roughness.
+    metallic_roughness: Option<serde_json::Value>,
     size: Option<f64>,
     even: Option<String>,
     odd: Option<String>,
@@ -218,7 +226,7 @@ const TEXTURE_KEYS: [&str; 5] = ["texture", "scale", "filter", "wrap", "encoding
 
 /// What a texture object may stand for, for the message when one is found
 /// elsewhere.
-const TEXTURE_PLACES: &str = "a texture (`{\"texture\": ...}`) can only be the `ambient`, `diffuse` or `specular` colour of a phong or blinn_phong shader, or the value of a u32 Params field of a wgsl shader";
+const TEXTURE_PLACES: &str = "a texture (`{\"texture\": ...}`) can only be the `ambient`, `diffuse` or `specular` colour of a phong or blinn_phong shader, the `base_colour` or `metallic_roughness` of a metallic_roughness shader, or the value of a u32 Params field of a wgsl shader";
 
 /// A JSON value described for messages.
 fn describe(v: &serde_json::Value) -> String {
@@ -833,9 +841,11 @@ impl Reader<'_> {
         let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
         let checker = s.kind == ShaderKind::Checker;
         let wgsl = s.kind == ShaderKind::Wgsl;
+        let pbr = s.kind == ShaderKind::MetallicRoughness;
         let kind = match s.kind {
             ShaderKind::Phong => "a phong shader",
             ShaderKind::BlinnPhong => "a blinn_phong shader",
+            ShaderKind::MetallicRoughness => "a metallic_roughness shader",
             ShaderKind::Checker => "a checker shader",
             ShaderKind::Wgsl => "a wgsl shader",
         };
@@ -859,6 +869,19 @@ impl Reader<'_> {
             if present && !phong {
                 return Err(self.err(f(k), format!("not a field of {kind}")));
             }
+        }
+        for (k, present) in [
+            ("base_colour", s.base_colour.is_some()),
+            ("metallic", s.metallic.is_some()),
+            ("roughness", s.roughness.is_some()),
+            ("metallic_roughness", s.metallic_roughness.is_some()),
+        ] {
+            if present && !pbr {
+                return Err(self.err(f(k), format!("not a field of {kind}")));
+            }
+        }
+        if pbr {
+            return self.metallic_roughness(&at, s, base, guard, textures);
         }
         if s.params.is_some() && !wgsl {
             return Err(self.err(f("params"), format!("not a field of {kind}")));
@@ -915,6 +938,57 @@ impl Reader<'_> {
                 odd: sub("odd", &s.odd)?,
             })
         })
+    }
+
+    /// A `metallic_roughness` shader at `at`: glTF's defaults (base colour
+    /// white, metallic 1, roughness 1) for absent fields.
+    fn metallic_roughness(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<Shader, SceneError> {
+        let f = |k: &str| format!("{at}.{k}");
+        let factor = |k: &str, v: Option<f32>| match v.unwrap_or(1.0) {
+            x if (0.0..=1.0).contains(&x) => Ok(x),
+            x => Err(self.err(f(k), format!("must be in [0, 1], got {x}"))),
+        };
+        let metallic = factor("metallic", s.metallic)?;
+        let roughness = factor("roughness", s.roughness)?;
+        let (base_colour, base_t) = self.colour_or_texture(
+            &f("base_colour"),
+            s.base_colour.as_ref(),
+            [1.0; 3],
+            base,
+            guard,
+            textures,
+        )?;
+        let metallic_roughness = match &s.metallic_roughness {
+            None | Some(serde_json::Value::Null) => None,
+            Some(serde_json::Value::Object(m)) => {
+                Some(self.texture_use(&f("metallic_roughness"), m, base, guard, textures)?)
+            }
+            Some(other) => {
+                return Err(self.err(
+                    f("metallic_roughness"),
+                    format!(
+                        "must be a texture {{\"texture\": \"file.png\", \"encoding\": \"linear\"}}, got {}",
+                        describe(other)
+                    ),
+                ))
+            }
+        };
+        Ok(Shader::MetallicRoughness(MetallicRoughness {
+            base_colour,
+            metallic,
+            roughness,
+            textures: MetallicRoughnessTextures {
+                base_colour: base_t,
+                metallic_roughness,
+            },
+        }))
     }
 
     /// No cycle among the checker shaders.

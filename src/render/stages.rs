@@ -54,6 +54,7 @@ shader_files![
     "shading/interface.wgsl",
     "shading/phong.wgsl",
     "shading/blinn_phong.wgsl",
+    "shading/metallic_roughness.wgsl",
     "textures.wgsl",
     "attributes.wgsl",
     "surface_maps.wgsl",

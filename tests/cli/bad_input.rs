@@ -537,6 +537,18 @@ field_cases! {
         => "background", ["non-negative"];
     negative_shininess: |v| v["shaders"]["red"]["shininess"] = json!(-2)
         => "shaders.red.shininess", [">= 0"];
+    roughness_above_one: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "roughness": 1.5})
+        => "shaders.red.roughness", ["[0, 1]", "1.5"];
+    negative_metallic: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "metallic": -0.1})
+        => "shaders.red.metallic", ["[0, 1]"];
+    negative_base_colour: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "base_colour": [0.5, -1, 0]})
+        => "shaders.red.base_colour", ["non-negative"];
+    shininess_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "shininess": 3})
+        => "shaders.red.shininess", ["not a field of a metallic_roughness shader"];
+    roughness_of_phong: |v| v["shaders"]["red"]["roughness"] = json!(0.5)
+        => "shaders.red.roughness", ["not a field of a phong shader"];
+    metallic_roughness_not_a_texture: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "metallic_roughness": [1, 1, 1]})
+        => "shaders.red.metallic_roughness", ["must be a texture"];
 }
 
 // ------------------------------------------------------------------ lights
@@ -1027,7 +1039,7 @@ fn reference_refuses_a_wgsl_shader() {
         Shape::OneLine,
         &[
             &path,
-            "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker)",
+            "the f64 reference renders only the built-in shaders (phong, blinn_phong, metallic_roughness, checker)",
             "is a WGSL file",
             "toon.wgsl",
         ],

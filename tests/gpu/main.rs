@@ -25,6 +25,7 @@ mod json_textures;
 mod khronos;
 mod large_scenes;
 mod lights;
+mod metallic_roughness;
 mod output;
 mod precision;
 mod preview;

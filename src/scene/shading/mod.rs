@@ -1,4 +1,5 @@
-//! Shading models ("shaders" in the seminar): Phong, Blinn-Phong, the 3D
+//! Shading models ("shaders" in the seminar): Phong, Blinn-Phong, glTF's
+//! metallic-roughness BRDF ([`metallic_roughness`]), the 3D
 //! checkerboard made of two sub-shaders, and shaders written as WGSL files
 //! ([`wgsl`]). The GPU versions of the built-in ones live in
 //! `shaders/shading/` under the same names.
@@ -13,12 +14,14 @@ pub mod checker;
 pub mod footprint;
 pub mod lexer;
 pub mod limits;
+pub mod metallic_roughness;
 pub mod phong;
 pub mod scan;
 pub mod stack;
 pub mod wgsl;
 
 pub use checker::Checker;
+pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessTextures};
 pub use phong::{Phong, PhongTextures};
 pub use wgsl::{
     reflect, Location, ParamField, ParamType, ParamValue, Reflection, ShaderFileError, WgslShader,
@@ -34,6 +37,8 @@ pub enum Shader {
     Phong(Phong),
     /// Blinn-Phong: specular lobe of the half vector `h` around `n`.
     BlinnPhong(Phong),
+    /// glTF 2.0's metallic-roughness BRDF.
+    MetallicRoughness(MetallicRoughness),
     /// 3D checkerboard of two sub-shaders.
     Checker(Checker),
     /// A shader written as a WGSL file, with its `Params` values.
