@@ -246,6 +246,8 @@ type WgslFiles = BTreeMap<PathBuf, (String, crate::scene::shading::Reflection)>;
 
 struct Reader<'a> {
     file: &'a Path,
+    /// The shader of a `mesh` object without one (its glTF materials).
+    gltf_materials: super::GltfMaterials,
 }
 
 impl Reader<'_> {
@@ -1215,7 +1217,7 @@ impl Reader<'_> {
     }
 
     /// A `mesh` object at `at` with the shader `shader` (None: each glTF
-    /// mesh gets a Phong shader of its base colour): reads the glTF file
+    /// mesh gets a shader of its material, as `--gltf-materials` says): reads the glTF file
     /// relative to `base`, applies the transform and adds the meshes, the
     /// notes and the files read to `loaded`.
     fn mesh(
@@ -1245,7 +1247,10 @@ impl Reader<'_> {
             .transpose()?
             .unwrap_or(DMat4::IDENTITY);
         let doc = super::gltf::read_with(&mesh_path, guard)?;
-        loaded.notes.extend(doc.notes);
+        let pbr =
+            shader.is_none() && self.gltf_materials == super::GltfMaterials::MetallicRoughness;
+        let applied = |n: &String| !(pbr && n.ends_with(super::gltf::METALLIC_ROUGHNESS_NOTE));
+        loaded.notes.extend(doc.notes.into_iter().filter(applied));
         loaded.files.extend(doc.files);
         // The file's textures follow the scene's: its materials' texture
         // ids move by this much.
@@ -1265,17 +1270,28 @@ impl Reader<'_> {
                 // The scene's shader replaces the material, maps included.
                 Some(s) => (s, Default::default()),
                 None => {
-                    let mut phong = gm.phong;
-                    moved(&mut phong.textures.ambient);
-                    moved(&mut phong.textures.diffuse);
-                    moved(&mut phong.textures.specular);
+                    let material = match self.gltf_materials {
+                        super::GltfMaterials::MetallicRoughness => {
+                            let mut pbr = gm.pbr;
+                            moved(&mut pbr.textures.base_colour);
+                            moved(&mut pbr.textures.metallic_roughness);
+                            Shader::MetallicRoughness(pbr)
+                        }
+                        super::GltfMaterials::Phong => {
+                            let mut phong = gm.phong;
+                            moved(&mut phong.textures.ambient);
+                            moved(&mut phong.textures.diffuse);
+                            moved(&mut phong.textures.specular);
+                            Shader::Phong(phong)
+                        }
+                    };
                     let mut maps = gm.maps;
                     if let Some((t, _)) = &mut maps.normal {
                         t.texture += offset;
                     }
                     moved(&mut maps.emission_texture);
                     moved(&mut maps.opacity_texture);
-                    loaded.scene.shaders.push(Shader::Phong(phong));
+                    loaded.scene.shaders.push(material);
                     (loaded.scene.shaders.len() - 1, maps)
                 }
             };
@@ -1395,7 +1411,10 @@ pub fn read_texture(
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
     let guard = super::guard::Guard::new(path, opts);
     let file = parse(path, &guard)?;
-    let r = Reader { file: path };
+    let r = Reader {
+        file: path,
+        gltf_materials: opts.gltf_materials,
+    };
     let camera = r.camera(&file.camera, opts)?;
     let background = r.colour("background", file.background)?;
     let base = path.parent().unwrap_or(Path::new("."));

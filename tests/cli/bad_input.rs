@@ -490,6 +490,7 @@ cli_cases! {
     cli_width_not_a_number: ["--width", "abc"] => Clap, ["--width", "abc"];
     cli_width_above_maximum: ["--width", "20000"] => Clap, ["--width", "20000"];
     cli_unknown_device: ["--device", "nosuchdevice"] => OneLine, ["nosuchdevice", "available: 0: "];
+    cli_unknown_gltf_materials: ["--gltf-materials", "pbr"] => Clap, ["--gltf-materials", "pbr", "metallic-roughness"];
 }
 
 #[test]

@@ -1,14 +1,20 @@
-//! glTF materials as penumbra's Phong shader and [`SurfaceMaps`], and the
+//! glTF materials as penumbra's shaders and [`SurfaceMaps`], and the
 //! textures, images and samplers they use.
 //!
-//! A material becomes `Phong { ambient: 0, diffuse: baseColorFactor.rgb,
-//! specular: 0, shininess: 1 }` with `baseColorTexture` as its diffuse
-//! texture; its normal map, emission and alpha become the primitive's
-//! [`SurfaceMaps`]. Metallic-roughness and occlusion have no meaning in
-//! the Phong model: they are named in a note, not applied (a material with
-//! `metallicFactor` 0, `roughnessFactor` 1 and no metallic-roughness
-//! texture is the diffuse surface Phong draws, and gets no note; glTF's
-//! defaults, 1 and 1, are a rough metal and do).
+//! A material becomes two shaders, of which the load options pick one
+//! ([`crate::loaders::GltfMaterials`]): glTF's own model,
+//! [`MetallicRoughness`] (`baseColorFactor`, `metallicFactor`,
+//! `roughnessFactor`, `baseColorTexture`, `metallicRoughnessTexture`), the
+//! default; and the seminar's mapping, `Phong { ambient: 0, diffuse:
+//! baseColorFactor.rgb, specular: 0, shininess: 1 }` with
+//! `baseColorTexture` as its diffuse texture, kept so that older renders can
+//! be reproduced. Its normal map, emission and alpha become the primitive's
+//! [`SurfaceMaps`]. Under Phong, metallic-roughness has no meaning: it is
+//! named in a note, not applied (a material with `metallicFactor` 0,
+//! `roughnessFactor` 1 and no metallic-roughness texture is the diffuse
+//! surface Phong draws, and gets no note; glTF's defaults, 1 and 1, are a
+//! rough metal and do). Occlusion applies to indirect light only, which
+//! penumbra's punctual lights are not: it is named in a note.
 //!
 //! Images are decoded once per (image, colour space): a colour use (base
 //! colour, emission) is sRGB, a normal map linear, so an image used both
@@ -22,7 +28,8 @@ use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use super::{Reader, Result};
 use crate::loaders::texture;
 use crate::scene::{
-    AlphaMode, Filter, Phong, Sampler, SurfaceMaps, TextureId, TextureRef, UvTransform, Wrap,
+    AlphaMode, Filter, MetallicRoughness, MetallicRoughnessTextures, Phong, Sampler, SurfaceMaps,
+    TextureId, TextureRef, UvTransform, Wrap,
 };
 
 /// What one glTF material gives a primitive: its shader and its maps. The
@@ -31,8 +38,10 @@ use crate::scene::{
 pub(super) struct Material {
     /// Linear RGB of `baseColorFactor`; `None` for the default material.
     pub base_color: Option<Vec3>,
-    /// The Phong shader the material maps to.
+    /// The Phong shader of the seminar's mapping.
     pub phong: Phong,
+    /// glTF's own model.
+    pub pbr: MetallicRoughness,
     /// Normal map, emission and alpha.
     pub maps: SurfaceMaps,
 }
@@ -49,6 +58,16 @@ const DEFAULT: Material = Material {
             ambient: None,
             diffuse: None,
             specular: None,
+        },
+    },
+    // glTF 2.0, 3.9.1: metallicFactor and roughnessFactor default to 1.
+    pbr: MetallicRoughness {
+        base_colour: Vec3::ONE,
+        metallic: 1.0,
+        roughness: 1.0,
+        textures: MetallicRoughnessTextures {
+            base_colour: None,
+            metallic_roughness: None,
         },
     },
     maps: SurfaceMaps::NONE,
@@ -83,6 +102,20 @@ impl Reader<'_> {
             let field = f("pbrMetallicRoughness.baseColorFactor");
             return self.fail(field, format!("alpha must be in [0, 1], got {alpha}"));
         }
+        let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+        for (k, x) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+            if !(0.0..=1.0).contains(&x) {
+                let field = f(&format!("pbrMetallicRoughness.{k}"));
+                return self.fail(field, format!("must be in [0, 1], got {x}"));
+            }
+        }
+        let metallic_roughness = match pbr.metallic_roughness_texture() {
+            Some(info) => {
+                let field = f("pbrMetallicRoughness.metallicRoughnessTexture");
+                Some(self.info(&info, &field, false)?)
+            }
+            None => None,
+        };
         // Metallic 0 and roughness 1 without a texture is the diffuse
         // surface that Phong draws; anything else looks different.
         self.flags.metallic_roughness |= pbr.metallic_factor() != 0.0
@@ -154,9 +187,19 @@ impl Reader<'_> {
             diffuse: c,
             ..DEFAULT.phong
         };
+        let pbr = MetallicRoughness {
+            base_colour: c,
+            metallic,
+            roughness,
+            textures: MetallicRoughnessTextures {
+                base_colour: base_texture,
+                metallic_roughness,
+            },
+        };
         let done = Material {
             base_color: Some(c),
             phong,
+            pbr,
             maps,
         };
         if self.materials.len() <= m {
