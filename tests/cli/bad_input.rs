@@ -1216,6 +1216,21 @@ fn gltf_indices_above_u32_are_refused_not_wrapped() {
 }
 
 #[test]
+fn gltf_metallic_and_roughness_factors_outside_0_1_are_refused() {
+    // The gltf crate may read them; glTF 2.0 bounds both to [0, 1].
+    box_textured_fails(
+        |g| g["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(1.5),
+        "materials[0].pbrMetallicRoughness.roughnessFactor",
+        &["must be in [0, 1], got 1.5"],
+    );
+    box_textured_fails(
+        |g| g["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(-0.5),
+        "materials[0].pbrMetallicRoughness.metallicFactor",
+        &["must be in [0, 1], got -0.5"],
+    );
+}
+
+#[test]
 fn gltf_texture_transform_errors_name_the_files_field() {
     box_textured_fails(
         |g| {

@@ -20,6 +20,7 @@ mod bunny;
 mod camera;
 mod checker;
 mod default_light;
+mod gltf_materials;
 mod hard_cases;
 mod json_textures;
 mod khronos;

@@ -1,0 +1,219 @@
+//! glTF materials through the loader and the metallic-roughness shader: a
+//! chart of quads (metal and dielectric at three roughnesses, a
+//! metallicRoughnessTexture, an occlusion texture and emission) built here as
+//! a glTF file, seen by an orthographic camera along −Z and lit by a
+//! directional light travelling along −Z.
+//!
+//! There n = v = l = h, so glTF 2.0's Appendix B reduces to closed forms:
+//! D = α²/(π(α² − 1 + 1)²) = 1/(πα²), V = 1/((1 + 1)(1 + 1)) = 1/4, and
+//! the Schlick term (1 − v·h)⁵ = 0, so
+//!   metal      = c·D·V            = c/(4πα²)
+//!   dielectric = 0.96·c/π + 0.04/(4πα²)
+//! each times the light's illuminance (n·l = 1). Tolerance: the quads are
+//! flat and head-on, so the only error is f32 rounding of a few operations
+//! on values up to ~25: 1e-4 relative is far above it and far below any
+//! wrong term.
+
+use crate::support;
+
+use glam::DVec3;
+use std::f64::consts::PI;
+
+const BASE: [f64; 3] = [0.9, 0.6, 0.3];
+const ILLUMINANCE: f64 = 3.0;
+const TOL: f64 = 1e-4;
+const WIDTH: u32 = 160;
+const HEIGHT: u32 = 80;
+
+/// Standard base64 (RFC 4648, with padding).
+fn base64(bytes: &[u8]) -> String {
+    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ABC[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// A 1×1 RGBA PNG of `rgba`.
+fn png(rgba: [u8; 4]) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba))
+        .write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
+/// The texel of the metallic-roughness and occlusion texture: R (occlusion)
+/// 0, G (roughness) 128, B (metallic) 191.
+const TEXEL: [u8; 4] = [0, 128, 191, 255];
+
+/// Quad centres: two rows of four (metal row on top).
+fn centre(i: usize) -> (f64, f64) {
+    (-3.6 + 2.4 * (i % 4) as f64, if i < 4 { 1.2 } else { -1.2 })
+}
+
+/// The chart as a glTF file: quads 0–2 metals at roughness 0.3, 0.5, 1;
+/// quad 3 metallic and roughness factors 1 scaled by the texture; quads
+/// 4–6 dielectrics at 0.3, 0.5, 1; quad 7 a dielectric at roughness 0.5
+/// with the texture as its occlusion and an emission.
+fn chart() -> String {
+    // A unit quad facing +Z, its uv, two triangles.
+    let mut buffer = Vec::new();
+    for [x, y] in [[-0.5f32, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]] {
+        for v in [x, y, 0.0] {
+            buffer.extend(v.to_le_bytes());
+        }
+    }
+    for [u, v] in [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
+        buffer.extend(u.to_le_bytes());
+        buffer.extend(v.to_le_bytes());
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        buffer.extend(i.to_le_bytes());
+    }
+    let texture = r#"{"index": 0}"#;
+    let material = |metallic: f64, roughness: f64, extra: &str| {
+        format!(
+            r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [{}, {}, {}, 1], "metallicFactor": {metallic}, "roughnessFactor": {roughness}{extra}}}}}"#,
+            BASE[0], BASE[1], BASE[2]
+        )
+    };
+    let mut materials = Vec::new();
+    for metallic in [1.0, 0.0] {
+        for roughness in [0.3, 0.5, 1.0] {
+            materials.push(material(metallic, roughness, ""));
+        }
+        if metallic == 1.0 {
+            materials.push(material(
+                1.0,
+                1.0,
+                &format!(r#", "metallicRoughnessTexture": {texture}"#),
+            ));
+        }
+    }
+    let mut last = material(0.0, 0.5, "");
+    last.pop();
+    last.push_str(&format!(
+        r#", "occlusionTexture": {texture}, "emissiveFactor": [0.2, 0.1, 0.05]}}"#
+    ));
+    materials.push(last);
+    let meshes: Vec<String> = (0..8)
+        .map(|m| {
+            format!(
+                r#"{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": {m}}}]}}"#
+            )
+        })
+        .collect();
+    let mut nodes: Vec<String> = (0..8)
+        .map(|i| {
+            let (x, y) = centre(i);
+            format!(r#"{{"mesh": {i}, "translation": [{x}, {y}, 0]}}"#)
+        })
+        .collect();
+    nodes.push(r#"{"camera": 0, "translation": [0, 0, 5]}"#.into());
+    nodes.push(r#"{"extensions": {"KHR_lights_punctual": {"light": 0}}}"#.into());
+    format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "directional", "intensity": {ILLUMINANCE}}}]}}}},
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]}}],
+  "nodes": [{}],
+  "cameras": [{{"type": "orthographic", "orthographic": {{"xmag": 4.8, "ymag": 2.4, "znear": 0.1, "zfar": 100}}}}],
+  "meshes": [{}],
+  "materials": [{}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "data:image/png;base64,{}"}}],
+  "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}
+  ]
+}}"#,
+        nodes.join(", "),
+        meshes.join(", "),
+        materials.join(", "),
+        base64(&png(TEXEL)),
+        buffer.len(),
+        base64(&buffer)
+    )
+}
+
+fn metal(roughness: f64, c: DVec3) -> DVec3 {
+    let a2 = roughness.powi(4);
+    c / (4.0 * PI * a2)
+}
+
+fn dielectric(roughness: f64, c: DVec3) -> DVec3 {
+    let a2 = roughness.powi(4);
+    0.96 * c / PI + DVec3::splat(0.04 / (4.0 * PI * a2))
+}
+
+/// The colour at each quad's centre, from the closed forms above.
+fn expected() -> [DVec3; 8] {
+    let c = DVec3::from(BASE);
+    // Linear texture channels: metallic = 191/255, roughness = 128/255.
+    let (m, r) = (191.0 / 255.0, 128.0 / 255.0);
+    let textured = dielectric(r, c) * (1.0 - m) + metal(r, c) * m;
+    [
+        metal(0.3, c),
+        metal(0.5, c),
+        metal(1.0, c),
+        textured,
+        dielectric(0.3, c),
+        dielectric(0.5, c),
+        dielectric(1.0, c),
+        // Occlusion does not touch punctual light; emission adds.
+        dielectric(0.5, c) + DVec3::new(0.2, 0.1, 0.05) / ILLUMINANCE,
+    ]
+    .map(|f| f * ILLUMINANCE)
+}
+
+#[test]
+fn a_metal_roughness_chart_matches_the_closed_forms() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("chart.gltf");
+    std::fs::write(&path, chart()).unwrap();
+    let opts = penumbra::loaders::LoadOptions {
+        width: Some(WIDTH),
+        height: Some(HEIGHT),
+        ..Default::default()
+    };
+    let scene = penumbra::loaders::load_scene(&path, &opts)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scene;
+    let img = support::render(&scene).image;
+    for (i, want) in expected().iter().enumerate() {
+        let (x, y) = centre(i);
+        let px = ((x + 4.8) / 9.6 * WIDTH as f64) as u32;
+        let py = ((2.4 - y) / 4.8 * HEIGHT as f64) as u32;
+        let got = img.at(px, py);
+        for k in 0..3 {
+            assert!(
+                (got[k] as f64 - want[k]).abs() <= TOL * want[k].max(1.0),
+                "quad {i}: got {:?}, want {want:?}",
+                &got[..3]
+            );
+        }
+    }
+}
