@@ -1271,6 +1271,7 @@ impl Reader<'_> {
                 Some(s) => (s, Default::default()),
                 None => {
                     let material = match self.gltf_materials {
+                        _ if gm.unlit => Shader::Phong(super::gltf::UNLIT),
                         super::GltfMaterials::MetallicRoughness => {
                             let mut pbr = gm.pbr;
                             moved(&mut pbr.textures.base_colour);

@@ -189,11 +189,11 @@ fn expected() -> [DVec3; 8] {
     .map(|f| f * ILLUMINANCE)
 }
 
-#[test]
-fn a_metal_roughness_chart_matches_the_closed_forms() {
+/// Renders the glTF text `gltf` at WIDTH×HEIGHT.
+fn render(gltf: &str) -> penumbra::render::Image {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("chart.gltf");
-    std::fs::write(&path, chart()).unwrap();
+    std::fs::write(&path, gltf).unwrap();
     let opts = penumbra::loaders::LoadOptions {
         width: Some(WIDTH),
         height: Some(HEIGHT),
@@ -202,12 +202,44 @@ fn a_metal_roughness_chart_matches_the_closed_forms() {
     let scene = penumbra::loaders::load_scene(&path, &opts)
         .unwrap_or_else(|e| panic!("{e}"))
         .scene;
-    let img = support::render(&scene).image;
+    support::render(&scene).image
+}
+
+/// The pixel at quad `i`'s centre.
+fn at_quad(img: &penumbra::render::Image, i: usize) -> [f32; 4] {
+    let (x, y) = centre(i);
+    let px = ((x + 4.8) / 9.6 * WIDTH as f64) as u32;
+    let py = ((2.4 - y) / 4.8 * HEIGHT as f64) as u32;
+    img.at(px, py)
+}
+
+/// KHR_materials_unlit: the base colour is the colour, whatever the light
+/// (here the chart's metal at roughness 0.3, which lit would be ~2.5).
+#[test]
+fn an_unlit_material_shows_its_base_colour() {
+    for intensity in [ILLUMINANCE, 0.0] {
+        let mut gltf: serde_json::Value = serde_json::from_str(&chart()).unwrap();
+        gltf["materials"][0]["extensions"] = serde_json::json!({"KHR_materials_unlit": {}});
+        gltf["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_materials_unlit"]);
+        gltf["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] =
+            serde_json::json!(intensity);
+        let img = render(&gltf.to_string());
+        support::assert_rgb(at_quad(&img, 0), BASE, 1e-6);
+        // The others are lit as before (or dark without light).
+        let lit = expected()[1] * (intensity / ILLUMINANCE);
+        support::assert_rgb(
+            at_quad(&img, 1),
+            lit.to_array(),
+            TOL * lit.max_element().max(1.0),
+        );
+    }
+}
+
+#[test]
+fn a_metal_roughness_chart_matches_the_closed_forms() {
+    let img = render(&chart());
     for (i, want) in expected().iter().enumerate() {
-        let (x, y) = centre(i);
-        let px = ((x + 4.8) / 9.6 * WIDTH as f64) as u32;
-        let py = ((2.4 - y) / 4.8 * HEIGHT as f64) as u32;
-        let got = img.at(px, py);
+        let got = at_quad(&img, i);
         for k in 0..3 {
             assert!(
                 (got[k] as f64 - want[k]).abs() <= TOL * want[k].max(1.0),

@@ -44,6 +44,9 @@ pub(super) struct Material {
     pub pbr: MetallicRoughness,
     /// Normal map, emission and alpha.
     pub maps: SurfaceMaps,
+    /// KHR_materials_unlit: the base colour (factor × texture) is the
+    /// colour, lights do not shade it (`maps.emission` holds it).
+    pub unlit: bool,
 }
 
 /// glTF's default material: white, opaque, no maps.
@@ -71,6 +74,7 @@ const DEFAULT: Material = Material {
         },
     },
     maps: SurfaceMaps::NONE,
+    unlit: false,
 };
 
 /// The extensions whose meaning penumbra applies; every other one in
@@ -79,6 +83,7 @@ pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
 ];
 
 impl Reader<'_> {
@@ -170,9 +175,16 @@ impl Reader<'_> {
             }
             gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         };
+        // KHR_materials_unlit: the base colour is emitted as it is (the
+        // emission's own factors are not part of an unlit material).
+        let unlit = self.has_extension(m, "KHR_materials_unlit");
+        let (emission, emission_texture) = match unlit {
+            true => (c, base_texture),
+            false => (factor * strength, emission_texture),
+        };
         let maps = SurfaceMaps {
             normal,
-            emission: factor * strength,
+            emission,
             emission_texture,
             alpha_mode,
             opacity: alpha,
@@ -201,6 +213,7 @@ impl Reader<'_> {
             phong,
             pbr,
             maps,
+            unlit,
         };
         if self.materials.len() <= m {
             self.materials.resize(m + 1, None);
@@ -251,6 +264,17 @@ impl Reader<'_> {
             tex_coord,
             transform,
         })
+    }
+
+    /// Whether `materials[m].extensions` has `name` (read from the JSON
+    /// itself, as the crate's optional features for it are off).
+    fn has_extension(&mut self, m: usize, name: &str) -> bool {
+        if self.raw.is_none() {
+            let value = serde_json::from_slice(self.json).unwrap_or(serde_json::Value::Null);
+            self.raw = Some(value);
+        }
+        let raw = self.raw.as_ref().expect("parsed above");
+        raw["materials"][m]["extensions"][name].is_object()
     }
 
     /// KHR_texture_transform of `materials[m].normalTexture`, which the

@@ -53,6 +53,8 @@ pub struct GltfMesh {
     pub phong: Phong,
     /// Its material as glTF's metallic-roughness model; textures as `phong`'s.
     pub pbr: MetallicRoughness,
+    /// KHR_materials_unlit: `maps.emission` is its colour; use [`UNLIT`].
+    pub unlit: bool,
     /// The material's normal map, emission and alpha; textures index
     /// [`GltfDocument::textures`].
     pub maps: SurfaceMaps,
@@ -131,9 +133,10 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             primitive: m.primitive,
             material: m.material,
         });
-        let wanted = match pbr {
-            true => Shader::MetallicRoughness(m.pbr),
-            false => Shader::Phong(m.phong),
+        let wanted = match (m.unlit, pbr) {
+            (true, _) => Shader::Phong(UNLIT),
+            (false, true) => Shader::MetallicRoughness(m.pbr),
+            (false, false) => Shader::Phong(m.phong),
         };
         let shader = shaders
             .iter()
@@ -393,6 +396,20 @@ fn walk(
     let doc = std::mem::replace(&mut r.doc, empty_document(path));
     Ok((doc, Some(scene.index())))
 }
+
+/// The shader of a KHR_materials_unlit material: one that reflects
+/// nothing, so that the point's colour is its emission, the base colour.
+pub const UNLIT: Phong = Phong {
+    ambient: glam::Vec3::ZERO,
+    diffuse: glam::Vec3::ZERO,
+    specular: glam::Vec3::ZERO,
+    shininess: 1.0,
+    textures: crate::scene::PhongTextures {
+        ambient: None,
+        diffuse: None,
+        specular: None,
+    },
+};
 
 /// The note on files whose materials are not diffuse, which Phong drops
 /// (`--gltf-materials phong`, and meshes of JSON scenes, whose shaders the
@@ -776,6 +793,7 @@ impl Reader<'_> {
             base_color: material.base_color,
             phong: material.phong,
             pbr: material.pbr,
+            unlit: material.unlit,
             maps: material.maps,
             name,
             primitive: field.to_string(),
