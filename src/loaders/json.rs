@@ -1272,6 +1272,14 @@ impl Reader<'_> {
                 None => {
                     let material = match self.gltf_materials {
                         _ if gm.unlit => Shader::Phong(super::gltf::UNLIT),
+                        super::GltfMaterials::MetallicRoughness
+                            if gm.specular_glossiness.is_some() =>
+                        {
+                            let mut sg = gm.specular_glossiness.expect("matched");
+                            moved(&mut sg.textures.diffuse);
+                            moved(&mut sg.textures.specular_glossiness);
+                            Shader::SpecularGlossiness(sg)
+                        }
                         super::GltfMaterials::MetallicRoughness => {
                             let mut pbr = gm.pbr;
                             moved(&mut pbr.textures.base_colour);

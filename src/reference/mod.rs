@@ -272,7 +272,10 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
                     w.path.display()
                 ))
             }
-            Shader::Phong(_) | Shader::BlinnPhong(_) | Shader::MetallicRoughness(_) => {}
+            Shader::Phong(_)
+            | Shader::BlinnPhong(_)
+            | Shader::MetallicRoughness(_)
+            | Shader::SpecularGlossiness(_) => {}
         }
     }
     Ok(())

@@ -11,8 +11,8 @@ use super::sampling::sample_2d;
 use super::shadows::occluded;
 use super::surface::AlphaRay;
 use super::World;
-use crate::scene::shading::metallic_roughness;
-use crate::scene::{MetallicRoughness, PhongTextures, Shader};
+use crate::scene::shading::{metallic_roughness, specular_glossiness};
+use crate::scene::{MetallicRoughness, PhongTextures, Shader, SpecularGlossiness};
 
 /// The lookup point of a checker moves this many cells into the surface
 /// (away from the viewer), so a surface on a cell boundary picks one cell
@@ -34,6 +34,8 @@ fn checker_is_even(size: f64, p: DVec3, n: DVec3) -> bool {
 pub struct Lobe {
     /// glTF's metallic-roughness BRDF instead of the Phong terms.
     pub pbr: Option<MetallicRoughness>,
+    /// KHR_materials_pbrSpecularGlossiness instead of the Phong terms.
+    pub sg: Option<SpecularGlossiness>,
     /// Blinn-Phong (half vector) rather than Phong (mirror direction).
     pub blinn: bool,
     /// k_a.
@@ -66,8 +68,13 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
             pbr: Some(*m),
             ..NONE
         },
+        Shader::SpecularGlossiness(m) => Lobe {
+            sg: Some(*m),
+            ..NONE
+        },
         Shader::Phong(m) | Shader::BlinnPhong(m) => Lobe {
             pbr: None,
+            sg: None,
             blinn: matches!(node, Shader::BlinnPhong(_)),
             ambient: m.ambient.as_dvec3(),
             diffuse: m.diffuse.as_dvec3(),
@@ -85,6 +92,7 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
 /// A node that adds nothing.
 const NONE: Lobe = Lobe {
     pbr: None,
+    sg: None,
     blinn: false,
     ambient: DVec3::ZERO,
     diffuse: DVec3::ZERO,
@@ -155,6 +163,14 @@ pub fn shade(
             m.roughness as f64,
         )
     });
+    // (diffuse, specular, glossiness) after the textures, in f64.
+    let mut sg_f64 = node.sg.map(|m| {
+        (
+            m.diffuse.as_dvec3(),
+            m.specular.as_dvec3(),
+            m.glossiness as f64,
+        )
+    });
     if let Some(s) = &hit.surface {
         let tex = |t: &Option<crate::scene::TextureRef>| {
             t.map_or(DVec3::ONE, |t| s.sample(world, &t).truncate())
@@ -167,6 +183,16 @@ pub fn shade(
             let c = m.base_colour.as_dvec3() * tex(&m.textures.base_colour) * s.colour.truncate();
             let mr = tex(&m.textures.metallic_roughness);
             pbr_f64 = Some((c, m.metallic as f64 * mr.z, m.roughness as f64 * mr.y));
+        }
+        // The specular-glossiness shader's `prepare`.
+        if let Some(m) = &node.sg {
+            let d = m.diffuse.as_dvec3() * tex(&m.textures.diffuse) * s.colour.truncate();
+            let sg = m
+                .textures
+                .specular_glossiness
+                .map_or(glam::DVec4::ONE, |t| s.sample(world, &t));
+            let spec = m.specular.as_dvec3() * sg.truncate();
+            sg_f64 = Some((d, spec, m.glossiness as f64 * sg.w));
         }
         let object = super::surface::object_of(world, hit.kind, hit.index) as usize;
         let maps = &world.objects[object].maps;
@@ -199,6 +225,12 @@ pub fn shade(
             }
             if let Some((c, metallic, roughness)) = pbr_f64 {
                 let (d, sp) = metallic_roughness::brdf(n, ls.to_light, v, c, metallic, roughness);
+                colour += ls.falloff * ln * (d * light.diffuse + sp * light.specular);
+                continue;
+            }
+            if let Some((diffuse, specular, glossiness)) = sg_f64 {
+                let (d, sp) =
+                    specular_glossiness::brdf(n, ls.to_light, v, diffuse, specular, glossiness);
                 colour += ls.falloff * ln * (d * light.diffuse + sp * light.specular);
                 continue;
             }

@@ -55,6 +55,7 @@ shader_files![
     "shading/phong.wgsl",
     "shading/blinn_phong.wgsl",
     "shading/metallic_roughness.wgsl",
+    "shading/specular_glossiness.wgsl",
     "textures.wgsl",
     "attributes.wgsl",
     "surface_maps.wgsl",

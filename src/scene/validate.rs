@@ -292,6 +292,27 @@ fn shader(i: usize, sh: &Shader, n: usize, nt: usize) -> Result<(), Invalid> {
                 }
             }
         }
+        Shader::SpecularGlossiness(m) => {
+            colour(&f("diffuse"), m.diffuse)?;
+            colour(&f("specular"), m.specular)?;
+            if !(0.0..=1.0).contains(&m.glossiness) {
+                return Err(Invalid::new(
+                    f("glossiness"),
+                    format!("must be in [0, 1], got {}", m.glossiness),
+                ));
+            }
+            for (k, t) in [
+                ("textures.diffuse", &m.textures.diffuse),
+                (
+                    "textures.specular_glossiness",
+                    &m.textures.specular_glossiness,
+                ),
+            ] {
+                if let Some(t) = t {
+                    texture_ref(&f(k), t, nt)?;
+                }
+            }
+        }
         Shader::Checker(c) => {
             if !(c.size > 0.0 && c.size.is_finite()) {
                 return Err(Invalid::new(

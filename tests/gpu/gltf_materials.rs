@@ -191,6 +191,11 @@ fn expected() -> [DVec3; 8] {
 
 /// Renders the glTF text `gltf` at WIDTH×HEIGHT.
 fn render(gltf: &str) -> penumbra::render::Image {
+    support::render(&load(gltf)).image
+}
+
+/// Loads the glTF text `gltf` at WIDTH×HEIGHT.
+fn load(gltf: &str) -> penumbra::scene::Scene {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("chart.gltf");
     std::fs::write(&path, gltf).unwrap();
@@ -199,10 +204,9 @@ fn render(gltf: &str) -> penumbra::render::Image {
         height: Some(HEIGHT),
         ..Default::default()
     };
-    let scene = penumbra::loaders::load_scene(&path, &opts)
+    penumbra::loaders::load_scene(&path, &opts)
         .unwrap_or_else(|e| panic!("{e}"))
-        .scene;
-    support::render(&scene).image
+        .scene
 }
 
 /// The pixel at quad `i`'s centre.
@@ -248,4 +252,54 @@ fn a_metal_roughness_chart_matches_the_closed_forms() {
             );
         }
     }
+}
+
+/// sRGB's decoding (IEC 61966-2-1) of an 8-bit code.
+fn srgb(code: u8) -> f64 {
+    let c = f64::from(code) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// KHR_materials_pbrSpecularGlossiness head-on (v·h = 1, so F = F0):
+/// c_diff = diffuse·(1 − max F0), α = (1 − glossiness)², and
+/// f = (1 − F0)·c_diff/π + F0·D·V with D·V = 1/(4πα²). Quad 1 has factors
+/// only; quad 2 the texture as its diffuseTexture (sRGB) and its
+/// specularGlossinessTexture (specular sRGB RGB, glossiness linear A).
+#[test]
+fn specular_glossiness_materials_match_their_formulas() {
+    let mut gltf: serde_json::Value = serde_json::from_str(&chart()).unwrap();
+    gltf["materials"][1]["extensions"] = serde_json::json!({"KHR_materials_pbrSpecularGlossiness": {
+        "diffuseFactor": [0.5, 0.4, 0.3, 1], "specularFactor": [0.2, 0.3, 0.1], "glossinessFactor": 0.6}});
+    gltf["materials"][2]["extensions"] = serde_json::json!({"KHR_materials_pbrSpecularGlossiness": {
+        "diffuseTexture": {"index": 0}, "specularGlossinessTexture": {"index": 0}, "glossinessFactor": 0.5}});
+    gltf["extensionsUsed"] =
+        serde_json::json!(["KHR_lights_punctual", "KHR_materials_pbrSpecularGlossiness"]);
+    let scene = load(&gltf.to_string());
+    let img = support::render(&scene).image;
+    // The f64 reference renders the same image.
+    let reference = penumbra::reference::render(&scene, &Default::default(), Default::default());
+    for (a, b) in img.pixels.iter().zip(&reference.image.pixels) {
+        let want = [b[0], b[1], b[2]].map(f64::from);
+        let scale = want.iter().fold(1.0f64, |m, &x| m.max(x));
+        support::assert_rgb(*a, want, 2e-3 * scale);
+    }
+    let f = |diffuse: DVec3, f0: DVec3, glossiness: f64| {
+        let a2 = (1.0 - glossiness).powi(4);
+        let c_diff = diffuse * (1.0 - f0.max_element());
+        ((DVec3::ONE - f0) * c_diff / PI + f0 / (4.0 * PI * a2)) * ILLUMINANCE
+    };
+    let quad1 = f(DVec3::new(0.5, 0.4, 0.3), DVec3::new(0.2, 0.3, 0.1), 0.6);
+    let t = DVec3::new(srgb(TEXEL[0]), srgb(TEXEL[1]), srgb(TEXEL[2]));
+    let quad2 = f(t, t, 0.5 * f64::from(TEXEL[3]) / 255.0);
+    for (i, want) in [(1, quad1), (2, quad2)] {
+        let got = at_quad(&img, i);
+        support::assert_rgb(got, want.to_array(), TOL * want.max_element().max(1.0));
+    }
+    // The others keep glTF's metallic-roughness model.
+    let want = expected()[0];
+    support::assert_rgb(at_quad(&img, 0), want.to_array(), TOL * want.max_element());
 }

@@ -28,8 +28,9 @@ use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use super::{Reader, Result};
 use crate::loaders::texture;
 use crate::scene::{
-    AlphaMode, Filter, MetallicRoughness, MetallicRoughnessTextures, Phong, Sampler, SurfaceMaps,
-    TextureId, TextureRef, UvTransform, Wrap,
+    AlphaMode, Filter, MetallicRoughness, MetallicRoughnessTextures, Phong, Sampler,
+    SpecularGlossiness, SpecularGlossinessTextures, SurfaceMaps, TextureId, TextureRef,
+    UvTransform, Wrap,
 };
 
 /// What one glTF material gives a primitive: its shader and its maps. The
@@ -47,6 +48,8 @@ pub(super) struct Material {
     /// KHR_materials_unlit: the base colour (factor × texture) is the
     /// colour, lights do not shade it (`maps.emission` holds it).
     pub unlit: bool,
+    /// KHR_materials_pbrSpecularGlossiness, which replaces `pbr` where given.
+    pub specular_glossiness: Option<SpecularGlossiness>,
 }
 
 /// glTF's default material: white, opaque, no maps.
@@ -75,6 +78,7 @@ const DEFAULT: Material = Material {
     },
     maps: SurfaceMaps::NONE,
     unlit: false,
+    specular_glossiness: None,
 };
 
 /// The extensions whose meaning penumbra applies; every other one in
@@ -84,6 +88,7 @@ pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
+    "KHR_materials_pbrSpecularGlossiness",
 ];
 
 impl Reader<'_> {
@@ -175,6 +180,10 @@ impl Reader<'_> {
             }
             gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         };
+        let specular_glossiness = match material.pbr_specular_glossiness() {
+            Some(sg) => Some(self.specular_glossiness(m, &sg)?),
+            None => None,
+        };
         // KHR_materials_unlit: the base colour is emitted as it is (the
         // emission's own factors are not part of an unlit material).
         let unlit = self.has_extension(m, "KHR_materials_unlit");
@@ -182,14 +191,22 @@ impl Reader<'_> {
             true => (c, base_texture),
             false => (factor * strength, emission_texture),
         };
+        // Alpha comes from the base colour texture, the same use (the
+        // diffuse ones under KHR_materials_pbrSpecularGlossiness).
+        let (alpha, alpha_texture) = match &specular_glossiness {
+            Some((_, a)) => (
+                *a,
+                specular_glossiness.and_then(|(s, _)| s.textures.diffuse),
+            ),
+            None => (alpha, base_texture),
+        };
         let maps = SurfaceMaps {
             normal,
             emission,
             emission_texture,
             alpha_mode,
             opacity: alpha,
-            // Alpha comes from the base colour texture, the same use.
-            opacity_texture: base_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
+            opacity_texture: alpha_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
         };
         let phong = Phong {
             textures: crate::scene::PhongTextures {
@@ -214,6 +231,7 @@ impl Reader<'_> {
             pbr,
             maps,
             unlit,
+            specular_glossiness: specular_glossiness.map(|(s, _)| s),
         };
         if self.materials.len() <= m {
             self.materials.resize(m + 1, None);
@@ -264,6 +282,56 @@ impl Reader<'_> {
             tex_coord,
             transform,
         })
+    }
+
+    /// `materials[m]`'s KHR_materials_pbrSpecularGlossiness and the alpha
+    /// of its `diffuseFactor`.
+    fn specular_glossiness(
+        &mut self,
+        m: usize,
+        sg: &gltf::material::PbrSpecularGlossiness,
+    ) -> Result<(SpecularGlossiness, f32)> {
+        let at =
+            |k: &str| format!("materials[{m}].extensions.KHR_materials_pbrSpecularGlossiness.{k}");
+        let [r, g, b, a] = sg.diffuse_factor();
+        let diffuse = Vec3::new(r, g, b);
+        let specular = Vec3::from_array(sg.specular_factor());
+        for (k, c) in [("diffuseFactor", diffuse), ("specularFactor", specular)] {
+            if !c.is_finite() || c.min_element() < 0.0 {
+                return self.fail(at(k), format!("must be finite and non-negative, got {c}"));
+            }
+        }
+        if !(0.0..=1.0).contains(&a) {
+            return self.fail(
+                at("diffuseFactor"),
+                format!("alpha must be in [0, 1], got {a}"),
+            );
+        }
+        let glossiness = sg.glossiness_factor();
+        if !(0.0..=1.0).contains(&glossiness) {
+            let message = format!("must be in [0, 1], got {glossiness}");
+            return self.fail(at("glossinessFactor"), message);
+        }
+        let diffuse_texture = match sg.diffuse_texture() {
+            Some(info) => Some(self.info(&info, &at("diffuseTexture"), true)?),
+            None => None,
+        };
+        // Specular in sRGB RGB, glossiness in linear A: an sRGB texture's
+        // alpha is linear.
+        let specular_glossiness = match sg.specular_glossiness_texture() {
+            Some(info) => Some(self.info(&info, &at("specularGlossinessTexture"), true)?),
+            None => None,
+        };
+        let s = SpecularGlossiness {
+            diffuse,
+            specular,
+            glossiness,
+            textures: SpecularGlossinessTextures {
+                diffuse: diffuse_texture,
+                specular_glossiness,
+            },
+        };
+        Ok((s, a))
     }
 
     /// Whether `materials[m].extensions` has `name` (read from the JSON

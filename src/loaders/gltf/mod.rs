@@ -55,6 +55,8 @@ pub struct GltfMesh {
     pub pbr: MetallicRoughness,
     /// KHR_materials_unlit: `maps.emission` is its colour; use [`UNLIT`].
     pub unlit: bool,
+    /// KHR_materials_pbrSpecularGlossiness, used instead of `pbr` where given.
+    pub specular_glossiness: Option<crate::scene::SpecularGlossiness>,
     /// The material's normal map, emission and alpha; textures index
     /// [`GltfDocument::textures`].
     pub maps: SurfaceMaps,
@@ -133,10 +135,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             primitive: m.primitive,
             material: m.material,
         });
-        let wanted = match (m.unlit, pbr) {
-            (true, _) => Shader::Phong(UNLIT),
-            (false, true) => Shader::MetallicRoughness(m.pbr),
-            (false, false) => Shader::Phong(m.phong),
+        let wanted = match (m.unlit, pbr, m.specular_glossiness) {
+            (true, _, _) => Shader::Phong(UNLIT),
+            (false, true, Some(sg)) => Shader::SpecularGlossiness(sg),
+            (false, true, None) => Shader::MetallicRoughness(m.pbr),
+            (false, false, _) => Shader::Phong(m.phong),
         };
         let shader = shaders
             .iter()
@@ -794,6 +797,7 @@ impl Reader<'_> {
             phong: material.phong,
             pbr: material.pbr,
             unlit: material.unlit,
+            specular_glossiness: material.specular_glossiness,
             maps: material.maps,
             name,
             primitive: field.to_string(),

@@ -55,6 +55,19 @@ pub fn brdf(
     roughness: f64,
 ) -> (DVec3, DVec3) {
     let pi = std::f64::consts::PI;
+    let (specular, vh) = microfacet(n, l, v, roughness);
+    let schlick = (1.0 - vh.abs()).powi(5);
+    let metal = specular * (c + (DVec3::ONE - c) * schlick);
+    let fresnel = 0.04 + 0.96 * schlick;
+    let diffuse_part = (1.0 - metallic) * (1.0 - fresnel) * c / pi;
+    let specular_part = (1.0 - metallic) * fresnel * specular + metallic * metal;
+    (diffuse_part, specular_part)
+}
+
+/// Appendix B's specular microfacet term `V·D` at `roughness` (`α =
+/// roughness²`), and `v·h`.
+pub fn microfacet(n: DVec3, l: DVec3, v: DVec3, roughness: f64) -> (f64, f64) {
+    let pi = std::f64::consts::PI;
     let (nl, nv) = (n.dot(l), n.dot(v));
     let h = (l + v).normalize_or_zero();
     let (nh, vh, lh) = (n.dot(h), v.dot(h), l.dot(h));
@@ -74,11 +87,5 @@ pub fn brdf(
     } else {
         0.0
     };
-    let specular = vis * d;
-    let schlick = (1.0 - vh.abs()).powi(5);
-    let metal = specular * (c + (DVec3::ONE - c) * schlick);
-    let fresnel = 0.04 + 0.96 * schlick;
-    let diffuse_part = (1.0 - metallic) * (1.0 - fresnel) * c / pi;
-    let specular_part = (1.0 - metallic) * fresnel * specular + metallic * metal;
-    (diffuse_part, specular_part)
+    (vis * d, vh)
 }

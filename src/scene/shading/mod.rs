@@ -17,12 +17,14 @@ pub mod limits;
 pub mod metallic_roughness;
 pub mod phong;
 pub mod scan;
+pub mod specular_glossiness;
 pub mod stack;
 pub mod wgsl;
 
 pub use checker::Checker;
 pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessTextures};
 pub use phong::{Phong, PhongTextures};
+pub use specular_glossiness::{SpecularGlossiness, SpecularGlossinessTextures};
 pub use wgsl::{
     reflect, Location, ParamField, ParamType, ParamValue, Reflection, ShaderFileError, WgslShader,
 };
@@ -39,6 +41,8 @@ pub enum Shader {
     BlinnPhong(Phong),
     /// glTF 2.0's metallic-roughness BRDF.
     MetallicRoughness(MetallicRoughness),
+    /// glTF's KHR_materials_pbrSpecularGlossiness.
+    SpecularGlossiness(SpecularGlossiness),
     /// 3D checkerboard of two sub-shaders.
     Checker(Checker),
     /// A shader written as a WGSL file, with its `Params` values.
