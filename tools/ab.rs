@@ -96,9 +96,12 @@ fn main() -> anyhow::Result<()> {
         let (w, h) = up.size();
         let t0 = Instant::now();
         // Compile (first frame), then one warm-up frame.
-        r.render_uploaded(&up, w, h)
+        r.render(&up, penumbra::render::RenderRequest::new(w, h))
+            .map(|r| r.frame)
             .with_context(|| format!("shader tree {name}"))?;
-        let warm = r.render_uploaded(&up, w, h)?;
+        let warm = r
+            .render(&up, penumbra::render::RenderRequest::new(w, h))
+            .map(|r| r.frame)?;
         eprintln!(
             "{name}: compiled and warmed up in {:.0} ms; {} tiles of {:.2} MiB stage memory",
             ms(t0.elapsed()),
@@ -114,7 +117,9 @@ fn main() -> anyhow::Result<()> {
         for (i, (r, up)) in sides.iter_mut().enumerate() {
             let (w, h) = up.size();
             let cpu0 = if args.cpu_time { worker_cpu_ns()? } else { 0 };
-            let f = r.render_uploaded(up, w, h)?;
+            let f = r
+                .render(up, penumbra::render::RenderRequest::new(w, h))
+                .map(|r| r.frame)?;
             t[i] = if args.cpu_time {
                 (worker_cpu_ns()? - cpu0) as f64 / 1e6
             } else {

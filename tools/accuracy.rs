@@ -165,7 +165,12 @@ fn main() -> anyhow::Result<()> {
         for (i, c) in cases.iter().enumerate() {
             r.set_kernel(c.kernel);
             let (w, h) = c.uploaded.size();
-            let f = r.render_progressive(&c.uploaded, w, h, &c.sampling, &mut |_| {})?;
+            let f = r
+                .render(
+                    &c.uploaded,
+                    penumbra::render::RenderRequest::progressive(w, h, &c.sampling, &mut |_| {}),
+                )
+                .map(|r| r.frame)?;
             if run > 0 {
                 times[i].push(f.stats.timings.render);
             }

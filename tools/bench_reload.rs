@@ -403,7 +403,7 @@ fn main() -> anyhow::Result<()> {
         shaders: ShaderSource::Directory(shaders.clone()),
         ..Default::default()
     })?;
-    let frame = fresh.render(&loaded.scene)?;
+    let frame = fresh.render_scene(&loaded.scene)?;
     drop(fresh);
     let want = penumbra::output::encode(&frame.image, penumbra::output::Format::Png)?;
     let want = image::load_from_memory(&want)?.to_rgb8();

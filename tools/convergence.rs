@@ -75,12 +75,23 @@ fn measure(r: &mut Renderer, samples: u32, sampler: Sampler) -> anyhow::Result<(
     });
     let (scene, polygon) = scene(samples);
     let up = r.upload(&scene)?;
-    r.render_uploaded(&up, PX, PX)?; // warm-up (compiles the kernel)
+    r.render(&up, penumbra::render::RenderRequest::new(PX, PX))
+        .map(|r| r.frame)?; // warm-up (compiles the kernel)
     let mut times = Vec::new();
     let mut error = 0.0;
     for _ in 0..REPEATS {
         let t = Instant::now();
-        let frame = r.render_progressive(&up, PX, PX, &Sampling::default(), &mut |_| {})?;
+        let frame = r
+            .render(
+                &up,
+                penumbra::render::RenderRequest::progressive(
+                    PX,
+                    PX,
+                    &Sampling::default(),
+                    &mut |_| {},
+                ),
+            )
+            .map(|r| r.frame)?;
         times.push(common::ms(t.elapsed()));
         let mut sq = 0.0;
         for j in 0..PX {

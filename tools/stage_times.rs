@@ -72,11 +72,15 @@ fn main() -> anyhow::Result<()> {
     let up = r.upload(&scene)?;
     let (w, h) = up.size();
     // The first frame compiles the pipelines.
-    let first = r.render_uploaded(&up, w, h)?;
+    let first = r
+        .render(&up, penumbra::render::RenderRequest::new(w, h))
+        .map(|r| r.frame)?;
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); first.stage_times.len()];
     let mut totals = Vec::new();
     for _ in 0..frames {
-        let f = r.render_uploaded(&up, w, h)?;
+        let f = r
+            .render(&up, penumbra::render::RenderRequest::new(w, h))
+            .map(|r| r.frame)?;
         for (i, (_, t)) in f.stage_times.iter().enumerate() {
             times[i].push(*t);
         }

@@ -71,14 +71,21 @@ fn main() -> anyhow::Result<()> {
         let uploaded = renderer.upload(&scene)?;
         let (w, h) = uploaded.size();
         renderer.take_longest_wait();
-        renderer.render_uploaded(&uploaded, w, h)?;
+        renderer
+            .render(&uploaded, penumbra::render::RenderRequest::new(w, h))
+            .map(|r| r.frame)?;
         let cold = renderer.take_longest_wait();
         let (mut render, mut watch) = (Duration::ZERO, Duration::ZERO);
         for _ in 0..args.repeats {
-            renderer.render_uploaded(&uploaded, w, h)?;
+            renderer
+                .render(&uploaded, penumbra::render::RenderRequest::new(w, h))
+                .map(|r| r.frame)?;
             render = render.max(renderer.take_longest_wait());
             for (pw, ph) in [((w / 4).max(1), (h / 4).max(1)), (w, h)] {
-                renderer.render_cancellable(&uploaded, pw, ph, &mut || false)?;
+                renderer.render(
+                    &uploaded,
+                    penumbra::render::RenderRequest::cancellable(pw, ph, &mut || false),
+                )?;
             }
             watch = watch.max(renderer.take_longest_wait());
         }

@@ -56,7 +56,8 @@ pub fn frame(
     h: u32,
 ) -> anyhow::Result<Frame> {
     r.set_kernel(k);
-    Ok(r.render_uploaded(up, w, h)?)
+    Ok(r.render(up, penumbra::render::RenderRequest::new(w, h))
+        .map(|r| r.frame)?)
 }
 
 /// `reps` frames, after a first frame (which compiles the kernel if needed)

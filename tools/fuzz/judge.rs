@@ -4,7 +4,7 @@
 //! Memory is measured by a counting global allocator with per-thread totals,
 //! so the peak of one case is the peak of the worker thread that ran it; a
 //! compile also counts the whole process (naga runs on a thread of its own,
-//! `penumbra::scene::shading::stack`), see [`case_peak_all`].
+//! `penumbra::wgsl::stack`), see [`case_peak_all`].
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
