@@ -8,4 +8,5 @@
 mod brdf;
 mod gltf_loader;
 mod json_textures;
+mod kinds;
 mod wgsl_shaders;

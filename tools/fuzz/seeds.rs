@@ -271,11 +271,13 @@ fn generated_scenes() -> Vec<Value> {
             "red": {"type": "phong", "ambient": [0.1, 0, 0], "diffuse": [0.8, 0.1, 0.1], "specular": [1, 1, 1], "shininess": 20},
             "blue": {"type": "blinn_phong", "diffuse": [0.1, 0.1, 0.8], "shininess": 1},
             "board": {"type": "checker", "size": 0.5, "even": "red", "odd": "inner"},
-            "inner": {"type": "checker", "size": 0.1, "even": "blue", "odd": "red"}
+            "inner": {"type": "checker", "size": 0.1, "even": "blue", "odd": "red"},
+            "toon": {"type": "wgsl", "file": "shaders/toon.wgsl",
+                     "params": {"base": [0.95, 0.45, 0.1], "bands": 4, "highlight": [1.0, 1.0, 0.9], "shininess": 40}}
         },
         "objects": [
             {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "board"},
-            {"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "shader": "red"},
+            {"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "shader": "toon"},
             {"type": "triangle", "vertices": [[-1, 0, 0], [1, 0, 0], [0, 1, -1]], "shader": "blue"},
             {"type": "mesh", "file": "bunny.glb", "transform": {"translate": [1, 0, 0], "rotate": [0, 30, 0], "scale": [1, 2, 1]}}
         ],

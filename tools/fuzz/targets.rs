@@ -116,6 +116,12 @@ impl Workspace {
         let dir = keep.path().join("scene");
         std::fs::create_dir(&dir)?;
         std::fs::copy(root.join("scenes/bunny.glb"), dir.join("bunny.glb"))?;
+        // The user shader of the generated scenes (seeds.rs).
+        std::fs::create_dir(dir.join("shaders"))?;
+        std::fs::copy(
+            root.join("scenes/shaders/toon.wgsl"),
+            dir.join("shaders/toon.wgsl"),
+        )?;
         std::fs::write(keep.path().join("outside.bin"), [0u8; 256])?;
         let fifo = std::ffi::CString::new(dir.join("fifo.bin").as_os_str().as_encoded_bytes())
             .map_err(std::io::Error::other)?;
