@@ -26,7 +26,7 @@ the compiled code's hit count.
 
 Usage:
   peers.py run PEER... [--frames N]   print one JSON line per frame and peer
-  peers.py serve PEER                 for tools/bench.rs: one JSON line with
+  peers.py serve PEER                 for tools/bench/main.rs: one JSON line with
                                       the peer's facts and counts when ready,
                                       then one line {"frame_ms": ...} per
                                       "frame" line read from stdin
