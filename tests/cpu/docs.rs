@@ -10,6 +10,8 @@
 //!   character (`DIR/shaders/x.wgsl`, `$OUT/docs/…`, `target/…`) is not a
 //!   repository path and is not checked; trailing `.`, `,`, `:` and `;` are
 //!   punctuation, not part of the path, and `:LINE:COL` is cut off likewise.
+//!   `COMMIT:path` (git's revision syntax, `b43f463:tools/x.patch`) names a
+//!   file at that commit, which need not exist now, and is not checked.
 //! - **Links.** Every relative Markdown link or image, `[text](target)`, must
 //!   name an existing file or folder, resolved from the folder of the file
 //!   that holds it; the `#anchor` is cut off; links with a scheme
@@ -26,7 +28,7 @@
 //!   the first rule leaves alone; an output committed under `docs/` is a
 //!   file like any other and must exist.
 //! - **Binaries.** Every `--bin NAME` must name a binary of the workspace: the
-//!   `[[bin]]`s of Cargo.toml and tools/Cargo.toml, `src/main.rs`
+//!   `[[bin]]`s of Cargo.toml and tools/measure/Cargo.toml, `src/main.rs`
 //!   (`penumbra`) and `src/bin/*.rs`. In a `cargo run` command (up to its
 //!   closing backtick or the end of its line, and before ` -- `) a tools
 //!   binary needs `-p penumbra-tools` (the root package is the workspace's
@@ -54,7 +56,7 @@ const ROOTS: [&str; 7] = [
 const TOOLS_PACKAGE: &str = "penumbra-tools";
 
 /// The tools' manifest, relative to the repository root.
-const TOOLS_MANIFEST: &str = "tools/Cargo.toml";
+const TOOLS_MANIFEST: &str = "tools/measure/Cargo.toml";
 
 fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -102,6 +104,16 @@ fn named_paths(text: &str) -> Vec<(usize, String)> {
         }
         if text[..at].chars().next_back().is_some_and(is_path_char) {
             continue;
+        }
+        if let Some(before) = text[..at].strip_suffix(':') {
+            let revision: String = before
+                .chars()
+                .rev()
+                .take_while(char::is_ascii_hexdigit)
+                .collect();
+            if revision.len() >= 7 {
+                continue; // `COMMIT:path`: the file at that commit
+            }
         }
         let mut end = 0;
         let mut in_braces = false;
@@ -565,7 +577,8 @@ fn the_rules_find_planted_drift() {
     let text = "See `tools/no_such_tool.rs`, [a link](gone.md), src/**/nothing*.rs \
                 and `cargo run --release --bin bench`; `--bin nosuch`.\n\
                 Fine: `src/lib.rs`, [tests](tests.md#x), `shaders/stages/*.wgsl`, \
-                `tests/<binary>/main.rs`, `DIR/shaders/x.wgsl`, `target/x`, docs/.\n";
+                `tests/<binary>/main.rs`, `DIR/shaders/x.wgsl`, `target/x`, docs/, \
+                `git show b43f463:tools/gone.patch`.\n";
     check_paths(file, text, &mut problems);
     check_commands(file, text, &mut problems);
     let joined = problems.join("\n");
