@@ -596,3 +596,23 @@ fn the_rules_find_planted_drift() {
     }
     assert_eq!(problems.len(), 5, "more than the planted drift:\n{joined}");
 }
+
+/// The README's test command is the line CI runs (`.ci/run`, after "The
+/// README's test command:"), so that what a newcomer runs is what CI runs.
+#[test]
+fn the_readme_shows_the_test_command_ci_runs() {
+    let ci = read(".ci/run");
+    let mut lines = ci
+        .lines()
+        .skip_while(|l| !l.contains("The README's test command"));
+    lines.next();
+    let command = lines
+        .next()
+        .expect(".ci/run: a line after \"The README's test command:\"");
+    assert!(command.contains("cargo test"), ".ci/run runs {command:?}");
+    let readme = read("README.md");
+    assert!(
+        readme.lines().any(|l| l.trim() == command.trim()),
+        "README.md does not show the line CI runs: {command}"
+    );
+}

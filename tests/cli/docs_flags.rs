@@ -1,0 +1,204 @@
+//! The command lines the docs show are ones `penumbra` takes: every `--flag`
+//! of a `penumbra COMMAND …` line in README.md and docs/*.md must be listed
+//! by `penumbra COMMAND --help` (the paths, binaries and test modules the
+//! docs name are checked by `tests/cpu/docs.rs`).
+//!
+//! The rules: a command line starts with `penumbra ` followed by a command of
+//! `penumbra --help` (`farm` takes its sub-command too: `farm slurm`), in a
+//! fenced code block (then lines indented under it that start with `[` or
+//! `(` continue it, as in a synopsis) or in a backticked span (up to the
+//! closing backtick). Its flags are the words that start with `--` before a
+//! `|` pipe, a `;`, `&&` or `#`. `penumbra` preceded by a path character
+//! (`target/release/penumbra`, `$PENUMBRA`) counts as well, since the
+//! binary is the same.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// README.md and docs/*.md, as (path relative to the repository, text).
+fn documents() -> Vec<(PathBuf, String)> {
+    let mut files = vec![PathBuf::from("README.md")];
+    let mut docs: Vec<PathBuf> = fs::read_dir(repo().join("docs"))
+        .expect("read docs/")
+        .map(|entry| entry.expect("read docs/").path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "md"))
+        .map(|path| Path::new("docs").join(path.file_name().unwrap()))
+        .collect();
+    docs.sort();
+    files.extend(docs);
+    files
+        .into_iter()
+        .map(|file| {
+            let text = fs::read_to_string(repo().join(&file)).expect("read a doc");
+            (file, text)
+        })
+        .collect()
+}
+
+/// The `--flags` of `penumbra ARGS --help`.
+fn help_flags(args: &[&str]) -> BTreeSet<String> {
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(args)
+        .arg("--help")
+        .output()
+        .expect("run penumbra --help");
+    assert!(out.status.success(), "penumbra {args:?} --help failed");
+    flags(&String::from_utf8_lossy(&out.stdout))
+}
+
+/// The words of `text` that start with `--` (without what follows `=`).
+fn flags(text: &str) -> BTreeSet<String> {
+    text.split(|c: char| c.is_whitespace() || "[](),|`'\"".contains(c))
+        .filter(|w| w.starts_with("--") && w.len() > 2)
+        .map(|w| {
+            w.split('=')
+                .next()
+                .unwrap()
+                .trim_end_matches(['.', ':', ';'])
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// The commands of `penumbra --help` (the indented words of "Commands:").
+fn commands() -> Vec<String> {
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("--help")
+        .output()
+        .expect("run penumbra --help");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    text.lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .map(str::to_string)
+        .collect()
+}
+
+/// The penumbra command lines of `text`: (line number, the words after
+/// `penumbra`).
+fn command_lines(text: &str) -> Vec<(usize, String)> {
+    let mut found = Vec::new();
+    let mut in_block = false;
+    let mut current: Option<(usize, String)> = None;
+    for (i, line) in text.lines().enumerate() {
+        if line.trim_start().starts_with("```") {
+            in_block = !in_block;
+            found.extend(current.take());
+            continue;
+        }
+        if in_block {
+            let trimmed = line.trim_start();
+            if let Some((_, words)) = current.as_mut() {
+                if line.starts_with(' ') && trimmed.starts_with(['[', '(']) {
+                    words.push(' ');
+                    words.push_str(trimmed);
+                    continue;
+                }
+            }
+            found.extend(current.take());
+            if let Some(rest) = after_penumbra(line) {
+                current = Some((i + 1, rest.to_string()));
+            }
+        } else {
+            // Backticked spans on this line.
+            for span in line.split('`').skip(1).step_by(2) {
+                if let Some(rest) = after_penumbra(span) {
+                    found.push((i + 1, rest.to_string()));
+                }
+            }
+        }
+    }
+    found.extend(current);
+    found
+}
+
+/// What follows the first `penumbra ` of `line` (after a path or a variable
+/// naming the binary, or at the start).
+fn after_penumbra(line: &str) -> Option<&str> {
+    let at = line.find("penumbra ")?;
+    let before = line[..at].chars().next_back();
+    let ok = before.is_none_or(|c| c.is_whitespace() || "/$({".contains(c));
+    ok.then(|| &line[at + "penumbra ".len()..])
+}
+
+#[test]
+fn every_flag_of_a_penumbra_command_line_in_the_docs_exists() {
+    let commands = commands();
+    assert!(commands.iter().any(|c| c == "render"), "{commands:?}");
+    let mut known: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for (file, text) in documents() {
+        for (line, words) in command_lines(&text) {
+            let mut parts = words.split_whitespace();
+            let Some(command) = parts.next() else {
+                continue;
+            };
+            if !commands.iter().any(|c| c == command) {
+                continue; // "penumbra is …" in a sentence, not a command line
+            }
+            let mut key = vec![command];
+            if command == "farm" {
+                match parts.next() {
+                    Some(sub) if !sub.starts_with('-') => key.push(sub),
+                    _ => {}
+                }
+            }
+            let name = key.join(" ");
+            let allowed = known
+                .entry(name.clone())
+                .or_insert_with(|| help_flags(&key));
+            let end = words.find(['|', ';', '#']).unwrap_or(words.len());
+            let end = words[..end].find("&&").unwrap_or(end);
+            for flag in flags(&words[..end]) {
+                checked += 1;
+                if !allowed.contains(&flag) {
+                    problems.push(format!(
+                        "{}:{line}: `penumbra {name}` has no {flag}",
+                        file.display()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        checked > 20,
+        "only {checked} flags found: the rules no longer find the command lines"
+    );
+    assert!(
+        problems.is_empty(),
+        "the docs show flags that penumbra does not take:\n{}",
+        problems.join("\n")
+    );
+}
+
+/// The rules find a planted bad flag in each kind of command line.
+#[test]
+fn a_planted_flag_is_found() {
+    let text = "Run `penumbra render s.json --no-such-flag` or\n\n```\n\
+                penumbra watch SCENE [-o OUT]\n                [--nor-this]\n\
+                penumbra render s.json --spp 4 | tee x # --ignored\n```\n\
+                and penumbra is fine.\n";
+    let lines = command_lines(text);
+    let words: Vec<&str> = lines.iter().map(|(_, w)| w.as_str()).collect();
+    assert_eq!(
+        words,
+        [
+            "render s.json --no-such-flag",
+            "watch SCENE [-o OUT] [--nor-this]",
+            "render s.json --spp 4 | tee x # --ignored",
+        ]
+    );
+    assert!(!help_flags(&["render"]).contains("--no-such-flag"));
+    assert!(!help_flags(&["watch"]).contains("--nor-this"));
+    assert!(help_flags(&["render"]).contains("--spp"));
+}
