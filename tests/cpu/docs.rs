@@ -35,6 +35,13 @@
 //!   only default member), a `-p NAME` must name a workspace package, and a
 //!   `cargo test --test NAME` must name a test target of the root package.
 //!   An upper-case name (`--bin NAME`) is a placeholder.
+//! - **Code names.** Every backticked Rust path (`Renderer::render`,
+//!   `compile::shade_override_values`) in README.md and docs/*.md, and every
+//!   backticked snake_case name (`load_scene`, `check_bindings()`) in the docs
+//!   that describe the code (README.md, docs/architecture.md, docs/design.md),
+//!   must consist of identifiers found in the sources (`src/`, `shaders/`,
+//!   `tools/`, `tests/`, as words or file names). A name with `foo` in it is
+//!   a checklist's placeholder.
 //! - **Test modules.** docs/tests.md has one table row per test binary,
 //!   starting with the binary's file (`tests/gpu/main.rs`); its last cell
 //!   must name, backticked, every `mod x;` of that `main.rs`, and every
@@ -473,18 +480,104 @@ fn check_paths(file: &Path, text: &str, problems: &mut Vec<String>) {
     }
 }
 
+/// The identifiers (words) of every source file under `src/`, `shaders/`,
+/// `tools/` and `tests/`, and their file and folder names.
+fn source_words() -> BTreeSet<String> {
+    fn walk(dir: &Path, words: &mut BTreeSet<String>) {
+        let Ok(entries) = fs::read_dir(dir) else {
+            return;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.ends_with("tests/cpu/docs.rs") {
+                continue; // this file names what must not exist
+            }
+            let name = entry.file_name().to_string_lossy().into_owned();
+            words.insert(name.split('.').next().unwrap_or_default().to_string());
+            if path.is_dir() {
+                walk(&path, words);
+            } else if path
+                .extension()
+                .is_some_and(|e| e == "rs" || e == "wgsl" || e == "sh" || e == "py")
+            {
+                let text = fs::read_to_string(&path).unwrap_or_default();
+                for word in text.split(|c: char| !c.is_ascii_alphanumeric() && c != '_') {
+                    if !word.is_empty() {
+                        words.insert(word.to_string());
+                    }
+                }
+            }
+        }
+    }
+    let mut words = BTreeSet::new();
+    for root in ["src", "shaders", "tools", "tests"] {
+        walk(&repo().join(root), &mut words);
+    }
+    words
+}
+
+/// Whether `span` is a Rust path (`a::b`, maybe `a::b()`), and, with
+/// `snake` set, also a snake_case name (`load_scene`, `load_scene()`).
+fn code_name(span: &str, snake: bool) -> bool {
+    let name = span.strip_suffix("()").unwrap_or(span);
+    let ident = |s: &str| {
+        s.chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    if name.contains("::") {
+        return name.split("::").all(ident);
+    }
+    snake
+        && ident(name)
+        && name.contains('_')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+/// What is wrong with the code names in `text` (see the module doc).
+fn check_code_names(file: &Path, text: &str, words: &BTreeSet<String>, problems: &mut Vec<String>) {
+    let snake = ["README.md", "docs/architecture.md", "docs/design.md"]
+        .iter()
+        .any(|f| file == Path::new(f));
+    let mut offset = 0;
+    for (i, span) in text.split('`').enumerate() {
+        let at = offset;
+        offset += span.len() + 1;
+        if i % 2 == 0 || span.contains('\n') || span.contains("foo") || !code_name(span, snake) {
+            continue;
+        }
+        let missing: Vec<&str> = span
+            .split(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+            .filter(|w| !w.is_empty() && !words.contains(*w))
+            .collect();
+        if !missing.is_empty() {
+            problems.push(format!(
+                "{}:{}: `{span}`: no {} in the sources",
+                file.display(),
+                line_of(text, at),
+                missing.join(", ")
+            ));
+        }
+    }
+}
+
 /// Every problem of README.md and docs/*.md.
 fn problems() -> Vec<String> {
     let mut problems = Vec::new();
+    let words = source_words();
     for (file, text) in documents() {
         check_paths(&file, &text, &mut problems);
         check_commands(&file, &text, &mut problems);
+        check_code_names(&file, &text, &words, &mut problems);
     }
     problems
 }
 
 #[test]
-fn every_path_link_binary_and_test_target_named_in_the_docs_exists() {
+fn every_path_link_binary_test_target_and_code_name_in_the_docs_exists() {
     let problems = problems();
     assert!(
         problems.is_empty(),
@@ -581,6 +674,14 @@ fn the_rules_find_planted_drift() {
                 `git show b43f463:tools/gone.patch`.\n";
     check_paths(file, text, &mut problems);
     check_commands(file, text, &mut problems);
+    let words = source_words();
+    let code = "`Renderer::render_passes` and `Renderer::render`; `intersect_foo`.";
+    check_code_names(
+        Path::new("docs/architecture.md"),
+        code,
+        &words,
+        &mut problems,
+    );
     let joined = problems.join("\n");
     for expected in [
         "`tools/no_such_tool.rs` does not exist",
@@ -588,13 +689,14 @@ fn the_rules_find_planted_drift() {
         "nothing*.rs` does not exist",
         "bench is a binary of penumbra-tools",
         "`--bin nosuch`: no such binary",
+        "`Renderer::render_passes`: no render_passes in the sources",
     ] {
         assert!(
             joined.contains(expected),
             "not found: {expected}\nin:\n{joined}"
         );
     }
-    assert_eq!(problems.len(), 5, "more than the planted drift:\n{joined}");
+    assert_eq!(problems.len(), 6, "more than the planted drift:\n{joined}");
 }
 
 /// The README's test command is the line CI runs (`.ci/run`, after "The
