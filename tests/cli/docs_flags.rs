@@ -1,5 +1,6 @@
 //! The command lines the docs show are ones `penumbra` takes: every `--flag`
-//! of a `penumbra COMMAND …` line in README.md and docs/*.md must be listed
+//! of a `penumbra COMMAND …` line in README.md, scenes/README.md and
+//! docs/*.md must be listed
 //! by `penumbra COMMAND --help` (the paths, binaries and test modules the
 //! docs name are checked by `tests/cpu/docs.rs`).
 //!
@@ -21,9 +22,13 @@ fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// README.md and docs/*.md, as (path relative to the repository, text).
+/// README.md, scenes/README.md and docs/*.md, as (path relative to the
+/// repository, text).
 fn documents() -> Vec<(PathBuf, String)> {
-    let mut files = vec![PathBuf::from("README.md")];
+    let mut files = vec![
+        PathBuf::from("README.md"),
+        PathBuf::from("scenes/README.md"),
+    ];
     let mut docs: Vec<PathBuf> = fs::read_dir(repo().join("docs"))
         .expect("read docs/")
         .map(|entry| entry.expect("read docs/").path())

@@ -1,5 +1,6 @@
-//! Docs that cannot drift: README.md and every docs/*.md are read as text and
-//! what they name in the repository is checked against the repository.
+//! Docs that cannot drift: README.md, scenes/README.md (the scene format) and
+//! every docs/*.md are read as text and what they name in the repository is
+//! checked against the repository.
 //!
 //! The rules:
 //!
@@ -69,9 +70,13 @@ fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// README.md and docs/*.md, as (path relative to the repository, text).
+/// README.md, scenes/README.md and docs/*.md, as (path relative to the
+/// repository, text).
 fn documents() -> Vec<(PathBuf, String)> {
-    let mut files = vec![PathBuf::from("README.md")];
+    let mut files = vec![
+        PathBuf::from("README.md"),
+        PathBuf::from("scenes/README.md"),
+    ];
     let mut docs: Vec<PathBuf> = fs::read_dir(repo().join("docs"))
         .expect("read docs/")
         .map(|entry| entry.expect("read docs/").path())
