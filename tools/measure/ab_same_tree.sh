@@ -26,4 +26,4 @@ if [ ! -d "$dir" ]; then
 fi
 a=$(git -C "$dir" rev-parse HEAD)
 echo "A: $megakernel with src/bvh.rs of $sha ($a)" >&2
-exec "$root/tools/ab_commits.sh" "$a" "$sha" "${2:-11}" "${3:-scenes/bunny_scene.glb}"
+exec "$root/tools/measure/ab_commits.sh" "$a" "$sha" "${2:-11}" "${3:-scenes/bunny_scene.glb}"
