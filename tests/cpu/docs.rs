@@ -43,6 +43,8 @@
 //!   must consist of identifiers found in the sources (`src/`, `shaders/`,
 //!   `tools/`, `tests/`, as words or file names). A name with `foo` in it is
 //!   a checklist's placeholder.
+//! - **No orphans.** Every docs/*.md is reachable from README.md through
+//!   relative links between the docs.
 //! - **Test modules.** docs/tests.md has one table row per test binary,
 //!   starting with the binary's file (`tests/gpu/main.rs`); its last cell
 //!   must name, backticked, every `mod x;` of that `main.rs`, and every
@@ -721,5 +723,35 @@ fn the_readme_shows_the_test_command_ci_runs() {
     assert!(
         readme.lines().any(|l| l.trim() == command.trim()),
         "README.md does not show the line CI runs: {command}"
+    );
+}
+
+/// Every docs/*.md can be found from the README by following links.
+#[test]
+fn every_doc_is_reachable_from_the_readme() {
+    let docs: Vec<(PathBuf, String)> = documents();
+    let mut reached = BTreeSet::from([PathBuf::from("README.md")]);
+    let mut queue = vec![PathBuf::from("README.md")];
+    while let Some(file) = queue.pop() {
+        let Some((_, text)) = docs.iter().find(|(f, _)| *f == file) else {
+            continue;
+        };
+        for (_, target) in link_targets(text) {
+            if let Some(path) = resolve(&file, &target) {
+                if reached.insert(path.clone()) {
+                    queue.push(path);
+                }
+            }
+        }
+    }
+    let orphans: Vec<String> = docs
+        .iter()
+        .map(|(f, _)| f)
+        .filter(|f| !reached.contains(*f))
+        .map(|f| f.display().to_string())
+        .collect();
+    assert!(
+        orphans.is_empty(),
+        "no link leads from README.md to {orphans:?}"
     );
 }
