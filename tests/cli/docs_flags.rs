@@ -11,7 +11,8 @@
 //! closing backtick). Its flags are the words that start with `--` before a
 //! `|` pipe, a `;`, `&&` or `#`. `penumbra` preceded by a path character
 //! (`target/release/penumbra`, `$PENUMBRA`) counts as well, since the
-//! binary is the same.
+//! binary is the same, and so does `cargo run [--release] -- COMMAND …`
+//! (without `--bin` or `-p`, it runs penumbra).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -129,6 +130,14 @@ fn command_lines(text: &str) -> Vec<(usize, String)> {
 /// What follows the first `penumbra ` of `line` (after a path or a variable
 /// naming the binary, or at the start).
 fn after_penumbra(line: &str) -> Option<&str> {
+    if let Some(at) = line.find("cargo run") {
+        // `cargo run [--release] -- COMMAND …` runs penumbra, unless it names
+        // another binary or package.
+        let rest = &line[at..];
+        let args = rest.find(" -- ")?;
+        let cargo = &rest[..args];
+        return (!cargo.contains("--bin") && !cargo.contains("-p ")).then(|| &rest[args + 4..]);
+    }
     let at = line.find("penumbra ")?;
     let before = line[..at].chars().next_back();
     let ok = before.is_none_or(|c| c.is_whitespace() || "/$({".contains(c));
@@ -191,7 +200,9 @@ fn every_flag_of_a_penumbra_command_line_in_the_docs_exists() {
 fn a_planted_flag_is_found() {
     let text = "Run `penumbra render s.json --no-such-flag` or\n\n```\n\
                 penumbra watch SCENE [-o OUT]\n                [--nor-this]\n\
-                penumbra render s.json --spp 4 | tee x # --ignored\n```\n\
+                penumbra render s.json --spp 4 | tee x # --ignored\n\
+                tools/setup.sh && cargo run --release -- render s.json --nor-that\n\
+                cargo run -p penumbra-tools --bin ab -- s.json --b dir\n```\n\
                 and penumbra is fine.\n";
     let lines = command_lines(text);
     let words: Vec<&str> = lines.iter().map(|(_, w)| w.as_str()).collect();
@@ -201,6 +212,7 @@ fn a_planted_flag_is_found() {
             "render s.json --no-such-flag",
             "watch SCENE [-o OUT] [--nor-this]",
             "render s.json --spp 4 | tee x # --ignored",
+            "render s.json --nor-that",
         ]
     );
     assert!(!help_flags(&["render"]).contains("--no-such-flag"));
