@@ -23,19 +23,30 @@ fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// README.md, scenes/README.md and docs/*.md, as (path relative to the
-/// repository, text).
+/// The `.md` files under `dir` (relative to the repository), at any depth.
+fn markdown_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let entries = fs::read_dir(repo().join(dir)).expect("read docs/");
+    for entry in entries {
+        let name = entry.expect("read docs/").file_name();
+        let path = dir.join(&name);
+        if repo().join(&path).is_dir() {
+            markdown_files(&path, out);
+        } else if path.extension().is_some_and(|ext| ext == "md") {
+            out.push(path);
+        }
+    }
+}
+
+/// README.md, scenes/README.md and the Markdown files of docs/ (docs/*.md
+/// and the reports in its folders, such as docs/gpu/bench.md), as (path
+/// relative to the repository, text).
 fn documents() -> Vec<(PathBuf, String)> {
     let mut files = vec![
         PathBuf::from("README.md"),
         PathBuf::from("scenes/README.md"),
     ];
-    let mut docs: Vec<PathBuf> = fs::read_dir(repo().join("docs"))
-        .expect("read docs/")
-        .map(|entry| entry.expect("read docs/").path())
-        .filter(|path| path.extension().is_some_and(|ext| ext == "md"))
-        .map(|path| Path::new("docs").join(path.file_name().unwrap()))
-        .collect();
+    let mut docs = Vec::new();
+    markdown_files(Path::new("docs"), &mut docs);
     docs.sort();
     files.extend(docs);
     files
