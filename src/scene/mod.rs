@@ -40,6 +40,24 @@ pub enum Shape {
     Mesh(Mesh),
 }
 
+impl Shape {
+    /// The shape's `"type"` in a JSON scene (scenes/README.md; a glTF file
+    /// gives meshes): one exhaustive `match`, and [`Shape::TYPES`] lists
+    /// them.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Shape::Plane(_) => "plane",
+            Shape::Sphere(_) => "sphere",
+            Shape::Triangle(_) => "triangle",
+            Shape::Mesh(_) => "mesh",
+        }
+    }
+
+    /// Every kind's [`Shape::type_name`], for the tests that each kind is
+    /// covered (tests/cpu/kinds.rs).
+    pub const TYPES: [&'static str; 4] = ["plane", "sphere", "triangle", "mesh"];
+}
+
 /// A shape with the shader that colours it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
@@ -140,6 +158,9 @@ impl Scene {
                 LightKind::Spot { .. } => f.spot_lights = true,
                 LightKind::Rect { .. } | LightKind::Sphere { .. } => f.area_lights = true,
             }
+            // Every area kind (LightKind::samples, an exhaustive match) needs
+            // the shadow stage's area sampling code.
+            f.area_lights |= l.kind.is_area();
         }
         let uses = self.texture_uses();
         f.textures = !uses.is_empty();
@@ -246,7 +267,7 @@ impl Scene {
             .map(|o| match &o.shape {
                 Shape::Triangle(_) => 1,
                 Shape::Mesh(m) => m.indices.len(),
-                _ => 0,
+                Shape::Plane(_) | Shape::Sphere(_) => 0,
             })
             .sum()
     }

@@ -548,6 +548,12 @@ field_cases! {
         => "shaders.red.shininess", ["not a field of a metallic_roughness shader"];
     roughness_of_phong: |v| v["shaders"]["red"]["roughness"] = json!(0.5)
         => "shaders.red.roughness", ["not a field of a phong shader"];
+    glossiness_above_one: |v| v["shaders"]["red"] = json!({"type": "specular_glossiness", "glossiness": 2})
+        => "shaders.red.glossiness", ["[0, 1]", "2"];
+    negative_specular_of_specular_glossiness: |v| v["shaders"]["red"] = json!({"type": "specular_glossiness", "specular": [0, -1, 0]})
+        => "shaders.red.specular", ["non-negative"];
+    glossiness_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "glossiness": 0.5})
+        => "shaders.red.glossiness", ["not a field of a metallic_roughness shader"];
     metallic_roughness_not_a_texture: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "metallic_roughness": [1, 1, 1]})
         => "shaders.red.metallic_roughness", ["must be a texture"];
 }

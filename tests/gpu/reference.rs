@@ -271,7 +271,8 @@ fn bunny_matches_the_gpu() {
 }
 
 /// glTF's metallic-roughness BRDF: metal and dielectric spheres from
-/// roughness 0.05 to 1 on a half-metal floor, under a directional, a point
+/// roughness 0.05 to 1 on a half-metal floor, and two spheres of the
+/// specular-glossiness model, under a directional, a point
 /// and a spot light of different colours (each light's diffuse colour
 /// differs from its specular one, so the split of the BRDF between them is
 /// compared too).
@@ -284,6 +285,17 @@ fn metallic_roughness_matches_the_gpu() {
         r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"}"#
             .to_string(),
     ];
+    // KHR_materials_pbrSpecularGlossiness's model beside them (behind).
+    for (i, glossiness) in [0.4, 0.9].iter().enumerate() {
+        let name = format!("sg{i}");
+        shaders.push(format!(
+            r#""{name}": {{"type": "specular_glossiness", "diffuse": [0.2, 0.5, 0.3], "specular": [0.6, 0.4, 0.2], "glossiness": {glossiness}}}"#
+        ));
+        objects.push(format!(
+            r#"{{"type": "sphere", "center": [{}, 0.5, -1.8], "radius": 0.45, "shader": "{name}"}}"#,
+            i as f64 * 1.1 - 0.55
+        ));
+    }
     for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
         for (j, metallic) in [0.0, 1.0].iter().enumerate() {
             let name = format!("m{i}{j}");
@@ -313,6 +325,9 @@ fn metallic_roughness_matches_the_gpu() {
         objects.join(", ")
     );
     let scene = support::load_json(&json);
+    let kinds = |f: fn(&Shader) -> bool| scene.shaders.iter().filter(|s| f(s)).count();
+    assert_eq!(kinds(|s| matches!(s, Shader::MetallicRoughness(_))), 9);
+    assert_eq!(kinds(|s| matches!(s, Shader::SpecularGlossiness(_))), 2);
     gpu_vs_reference(
         "metallic_roughness",
         &scene,

@@ -316,6 +316,48 @@ mod tests {
         (*span as usize, layouter[handle].size as usize, fields)
     }
 
+    /// Every `#[repr(C)]` struct of this module is in [`host_layouts`], so
+    /// that a new mirror of a WGSL struct cannot go unchecked.
+    #[test]
+    fn every_mirrored_struct_is_in_host_layouts() {
+        let sources = [
+            include_str!("mod.rs"),
+            include_str!("aov.rs"),
+            include_str!("bvh.rs"),
+            include_str!("camera.rs"),
+            include_str!("lights.rs"),
+            include_str!("primitives.rs"),
+            include_str!("queries.rs"),
+            include_str!("shading.rs"),
+            include_str!("textures.rs"),
+        ];
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/render/layout");
+        let files = std::fs::read_dir(dir).unwrap().count();
+        assert_eq!(
+            files,
+            sources.len(),
+            "a file of src/render/layout/ is not read here"
+        );
+        let listed: Vec<&str> = host_layouts().iter().map(|(name, ..)| *name).collect();
+        let mut mirrored = 0;
+        for source in sources {
+            // A top-level `#[repr(C)]` attribute line, then the struct's line.
+            let mut lines = source.lines();
+            while let Some(line) = lines.next() {
+                if line != "#[repr(C)]" {
+                    continue;
+                }
+                let name = lines
+                    .find_map(|l| l.strip_prefix("pub struct "))
+                    .and_then(|rest| rest.split(|c: char| !c.is_alphanumeric()).next())
+                    .unwrap_or_default();
+                assert!(listed.contains(&name), "{name:?} is not in host_layouts()");
+                mirrored += 1;
+            }
+        }
+        assert_eq!(mirrored, listed.len());
+    }
+
     #[test]
     fn host_structs_match_wgsl_layout() {
         let source = crate::render::compile::ShaderSource::Embedded
@@ -447,6 +489,9 @@ mod tests {
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
+            ("KIND_PLANE", crate::render::trace::KIND_PLANE),
+            ("KIND_SPHERE", crate::render::trace::KIND_SPHERE),
+            ("KIND_TRIANGLE", crate::render::trace::KIND_TRIANGLE),
             ("UNIFORM_LIGHTS", lights::UNIFORM_LIGHTS as u32),
             (
                 "PRIMS_PER_TEXEL",
@@ -491,6 +536,22 @@ mod tests {
             };
             assert_eq!(wgsl, host, "{name}");
         }
+        // The other way round: every WGSL constant of the kinds and flags the
+        // host also numbers is in the list above, so a new `LIGHT_*` or
+        // `KIND_*` constant cannot go unchecked.
+        for (_, c) in module.constants.iter() {
+            let Some(name) = c.name.as_deref() else {
+                continue;
+            };
+            let numbered = ["LIGHT_", "KIND_", "FLAG_", "SHADER_", "PRIM_"]
+                .iter()
+                .any(|p| name.starts_with(p));
+            let shade_only = ["KIND_NONE", "PRIM_INDEX", "SHADER_NODE_TEXELS"].contains(&name);
+            assert!(
+                !numbered || shade_only || shared.iter().any(|(n, _)| *n == name),
+                "{name} is numbered in the WGSL but not checked against the host here"
+            );
+        }
         // Every primitive kind fits below the kind bits' all-ones value, so
         // that no hit's kind-and-object word is KIND_NONE (render::MAX_OBJECTS).
         let mut kinds = 0;
@@ -509,7 +570,11 @@ mod tests {
             assert!(kind < (1 << super::super::KIND_BITS) - 1, "{name} = {kind}");
             kinds += 1;
         }
-        assert_eq!(kinds, 3, "KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE");
+        assert_eq!(
+            kinds,
+            crate::render::trace::HitKind::ALL.len(),
+            "one KIND_ constant per HitKind"
+        );
         // PRIM_INDEX masks off exactly the two flag bits.
         let prim_index = module
             .constants
