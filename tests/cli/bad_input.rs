@@ -491,6 +491,9 @@ cli_cases! {
     cli_width_above_maximum: ["--width", "20000"] => Clap, ["--width", "20000"];
     cli_unknown_device: ["--device", "nosuchdevice"] => OneLine, ["nosuchdevice", "available: 0: "];
     cli_unknown_gltf_materials: ["--gltf-materials", "pbr"] => Clap, ["--gltf-materials", "pbr", "metallic-roughness"];
+    cli_exposure_not_a_number: ["--exposure", "nan"] => Clap, ["--exposure", "nan", "finite"];
+    cli_exposure_out_of_range: ["--exposure", "-100"] => Clap, ["--exposure", "-100", "[-64, 64]"];
+    cli_unknown_tonemap: ["--tonemap", "filmic"] => Clap, ["--tonemap", "filmic", "pbr-neutral"];
 }
 
 #[test]

@@ -53,3 +53,49 @@ fn phong_reproduces_the_seminar_mapping_and_the_default_is_gltfs_brdf() {
     );
     assert_eq!(pbr, render(&["--gltf-materials", "metallic-roughness"]));
 }
+
+/// `--exposure` and `--tonemap` change the PNG only: the EXR of the same
+/// render stays linear and bit-identical, and the PNG is the sRGB code of
+/// PBR Neutral of 2^EV × the EXR's values.
+#[test]
+fn exposure_and_tone_mapping_apply_to_the_png_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny_scene.glb");
+    let run = |out: &str, extra: &[&str]| {
+        let status = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .arg("render")
+            .arg(&scene)
+            .args(["--width", "32", "--height", "32", "-o"])
+            .arg(dir.path().join(out))
+            .args(extra)
+            .status()
+            .expect("run penumbra");
+        assert!(status.success(), "{extra:?}");
+    };
+    let flags = ["--exposure", "3", "--tonemap", "pbr-neutral"];
+    run("plain.exr", &[]);
+    run("mapped.exr", &flags);
+    run("mapped.png", &flags);
+    let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+    assert_eq!(
+        read("plain.exr"),
+        read("mapped.exr"),
+        "EXR output stays linear"
+    );
+    let linear = image::open(dir.path().join("plain.exr"))
+        .unwrap()
+        .to_rgba32f();
+    let png = image::open(dir.path().join("mapped.png"))
+        .unwrap()
+        .to_rgba8();
+    let mut bright = 0;
+    for (l, p) in linear.pixels().zip(png.pixels()) {
+        let scaled = [l[0], l[1], l[2]].map(|v| v * 3f32.exp2());
+        let mapped = penumbra::tonemap::pbr_neutral(scaled);
+        for c in 0..3 {
+            assert_eq!(p[c], penumbra::output::srgb8(mapped[c]), "{l:?} -> {p:?}");
+        }
+        bright += usize::from(scaled[0] > 0.76);
+    }
+    assert!(bright > 100, "{bright} pixels in the compressed range");
+}
