@@ -100,9 +100,9 @@ fn every_light_kind_is_covered() {
         "light",
         &LightKind::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
             typed: &[
-                &["tools/fuzz/seeds.rs"],
+                &["tools/measure/fuzz/seeds.rs"],
                 &["tests/cli/bad_input.rs", "tests/cli/area_light_input.rs"],
             ],
         },
@@ -128,8 +128,11 @@ fn every_object_kind_is_covered() {
         "object",
         &Shape::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[&["tools/fuzz/seeds.rs"], &["tests/cli/bad_input.rs"]],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
+            typed: &[
+                &["tools/measure/fuzz/seeds.rs"],
+                &["tests/cli/bad_input.rs"],
+            ],
         },
         &mut missing,
     );
@@ -150,8 +153,11 @@ fn every_shader_kind_is_covered() {
         "shader",
         &Shader::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[&["tools/fuzz/seeds.rs"], &["tests/cli/bad_input.rs"]],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
+            typed: &[
+                &["tools/measure/fuzz/seeds.rs"],
+                &["tests/cli/bad_input.rs"],
+            ],
         },
         &mut missing,
     );
