@@ -118,6 +118,17 @@ fn every_light_kind_is_covered() {
         "{used:?}"
     );
     missing.extend(reference_covers(&LightKind::TYPES, &used, "LightKind"));
+    // An end-to-end test of each kind's light against its formula.
+    let end_to_end = text("tests/gpu/lights.rs") + &text("tests/gpu/area_lights.rs");
+    for t in LightKind::TYPES {
+        let typed = format!("\"type\": \"{t}\"");
+        let built = format!("LightKind::{}", variant(t));
+        if !end_to_end.contains(&typed) && !end_to_end.contains(&built) {
+            missing.push(format!(
+                "light kind \"{t}\": not in tests/gpu/lights.rs or tests/gpu/area_lights.rs"
+            ));
+        }
+    }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
 
