@@ -77,13 +77,26 @@ fn closest_sphere(i: u32, ray: Ray, hit: ptr<function, Hit>) {
 fn closest_triangle(i: u32, ray: Ray, hit: ptr<function, Hit>) {
     let tri = triangle(i);
     let h = intersect_triangle(tri, ray, (*hit).t);
-    if h.x > 0.0 && triangle_is_there(i, tri, h.yz) {
+    if h.x > 0.0 && faces_the_ray(tri, ray) && triangle_is_there(i, tri, h.yz) {
         (*hit).found = true;
         (*hit).t = h.x;
         (*hit).kind = KIND_TRIANGLE;
         (*hit).index = i;
         (*hit).coords = h.yz;
     }
+}
+
+// Whether a camera ray sees the triangle: always, but for a single-sided
+// one (surface map texel 2's z, glTF's `doubleSided: false`) hit from its
+// back, where the ray meets the side its normal (v1 - v0) × (v2 - v0), the
+// counter-clockwise front of glTF, points away from. Shadow rays do not ask.
+fn faces_the_ray(tri: Triangle, ray: Ray) -> bool {
+    // The facing first (the triangle is at hand), the material's flag only
+    // for a back face, which camera rays rarely meet.
+    if !HAS_SINGLE_SIDED || dot(cross(tri.v1 - tri.v0, tri.v2 - tri.v0), ray.dir) < 0.0 {
+        return true;
+    }
+    return penumbra_surface_map(tri.object, 2u).z == 0u;
 }
 
 // Position, normals and shader of the nearest hit. Both normals are turned to

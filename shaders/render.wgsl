@@ -27,6 +27,9 @@ override HAS_TEXTURES: bool = true;
 override HAS_ATTRIBUTES: bool = true;
 override HAS_NORMAL_MAPS: bool = true;
 override HAS_ALPHA_TESTS: bool = true;
+// Some triangle is single-sided (glTF `doubleSided: false`): camera rays
+// skip its back face (hit.wgsl, faces_the_ray).
+override HAS_SINGLE_SIDED: bool = true;
 // Kernel variants chosen by the user (render::KernelOptions).
 override USE_BVH: bool = true;
 override TRIANGLE_TEST: u32 = 0u;

@@ -78,7 +78,9 @@ pub fn closest_hit(world: &World, ray: &Ray, alpha_ray: AlphaRay) -> Option<Hit>
         } else if let Some((t, u, v)) =
             intersect::triangle(&world.triangles[prim as usize], ray, t_max)
         {
-            if !world.alpha || surface::is_there(world, alpha_ray, prim, u, v, ray.at(t)) {
+            if faces_the_ray(world, prim, ray)
+                && (!world.alpha || surface::is_there(world, alpha_ray, prim, u, v, ray.at(t)))
+            {
                 best = Some((t, Kind::Triangle, prim, u, v));
                 return t;
             }
@@ -87,6 +89,18 @@ pub fn closest_hit(world: &World, ray: &Ray, alpha_ray: AlphaRay) -> Option<Hit>
     });
     let (t, kind, index, u, v) = best?;
     Some(finish_hit(world, ray, t, kind, index, u, v))
+}
+
+/// Whether a camera ray sees triangle `prim`: always, but for a
+/// single-sided one (glTF's `doubleSided: false`) hit from its back, where
+/// the ray meets the side its normal `(v1 − v0) × (v2 − v0)` points away
+/// from (`faces_the_ray` in `shaders/hit.wgsl`). Shadow rays do not ask.
+fn faces_the_ray(world: &World, prim: u32, ray: &Ray) -> bool {
+    let tri = &world.triangles[prim as usize];
+    tri.normal.dot(ray.dir) < 0.0
+        || world.objects[world.triangle_objects[prim as usize] as usize]
+            .maps
+            .double_sided
 }
 
 /// Position, normals (both turned to face the ray: surfaces are two-sided)

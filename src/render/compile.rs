@@ -670,7 +670,7 @@ pub fn shade_setting_values(s: &Settings) -> [(&'static str, bool); 2] {
 }
 
 /// The WGSL `override` for each feature, as in `shaders/render.wgsl`.
-pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
+pub fn override_values(f: &Features) -> [(&'static str, bool); 14] {
     [
         ("HAS_PLANES", f.planes),
         ("HAS_SPHERES", f.spheres),
@@ -685,6 +685,7 @@ pub fn override_values(f: &Features) -> [(&'static str, bool); 13] {
         ("HAS_ATTRIBUTES", f.attributes),
         ("HAS_NORMAL_MAPS", f.normal_maps),
         ("HAS_ALPHA_TESTS", f.alpha_tests),
+        ("HAS_SINGLE_SIDED", f.single_sided),
     ]
 }
 
@@ -886,6 +887,7 @@ mod tests {
             emission: true,
             normal_maps: true,
             alpha_tests: true,
+            single_sided: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [

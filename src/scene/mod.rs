@@ -125,6 +125,8 @@ pub struct Features {
     pub normal_maps: bool,
     /// Some object is masked or blended: traversal tests alpha.
     pub alpha_tests: bool,
+    /// Some triangle is single-sided: camera rays skip its back face.
+    pub single_sided: bool,
 }
 
 impl Scene {
@@ -182,6 +184,9 @@ impl Scene {
             .objects
             .iter()
             .any(|o| o.maps.alpha_mode != AlphaMode::Opaque);
+        f.single_sided = self.objects.iter().any(|o| {
+            !o.maps.double_sided && matches!(o.shape, Shape::Triangle(_) | Shape::Mesh(_))
+        });
         let mut seen = vec![false; self.shaders.len()];
         let mut todo: Vec<ShaderId> = self.objects.iter().map(|o| o.shader).collect();
         while let Some(id) = todo.pop() {

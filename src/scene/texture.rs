@@ -434,6 +434,12 @@ pub struct SurfaceMaps {
     /// The texture whose alpha multiplies [`SurfaceMaps::opacity`] (glTF's
     /// base colour texture).
     pub opacity_texture: Option<TextureRef>,
+    /// Whether the back faces of its triangles are seen (glTF's material
+    /// `doubleSided`; true for everything but glTF's single-sided materials).
+    /// Camera rays pass through a single-sided triangle's back face
+    /// (glTF 2.0, 3.9.5 "Double Sided"); shadow rays do not: a closed
+    /// single-sided mesh still casts its shadow.
+    pub double_sided: bool,
 }
 
 impl Default for SurfaceMaps {
@@ -451,6 +457,7 @@ impl SurfaceMaps {
         alpha_mode: AlphaMode::Opaque,
         opacity: 1.0,
         opacity_texture: None,
+        double_sided: true,
     };
 
     /// Whether any map, emission or alpha is in use.

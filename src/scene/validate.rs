@@ -677,6 +677,7 @@ mod tests {
                     alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
                     opacity: 1.0,
                     opacity_texture: Some(t),
+                    double_sided: true,
                 },
             }],
             lights: vec![],

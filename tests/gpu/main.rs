@@ -20,6 +20,7 @@ mod bunny;
 mod camera;
 mod checker;
 mod default_light;
+mod double_sided;
 mod gltf_materials;
 mod hard_cases;
 mod json_textures;

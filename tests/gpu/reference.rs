@@ -129,6 +129,22 @@ fn gpu_vs_reference(
     (g, r)
 }
 
+/// Single-sided triangles seen from their back (glTF `doubleSided: false`):
+/// the reference skips them for camera rays and keeps them as occluders, as
+/// the kernel does.
+#[test]
+fn single_sided_triangles_match_the_gpu() {
+    for (flipped, double_sided) in [(true, false), (false, false), (true, true)] {
+        let scene = crate::double_sided::scene(flipped, double_sided);
+        gpu_vs_reference(
+            &format!("single-sided quad, flipped {flipped}, double-sided {double_sided}"),
+            &scene,
+            KernelOptions::default(),
+            Sampling::default(),
+        );
+    }
+}
+
 fn lambert(rgb: f32) -> Shader {
     Shader::Phong(Phong {
         textures: Default::default(),

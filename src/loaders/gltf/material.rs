@@ -207,6 +207,9 @@ impl Reader<'_> {
             alpha_mode,
             opacity: alpha,
             opacity_texture: alpha_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
+            // glTF 2.0, material.doubleSided (default false): back faces of
+            // a single-sided material are culled.
+            double_sided: material.double_sided(),
         };
         let phong = Phong {
             textures: crate::scene::PhongTextures {

@@ -225,7 +225,12 @@ impl GpuTextures {
                     use_index(&uses, &m.emission_texture),
                 ],
                 [normal, f(scale), mode, f(cutoff)],
-                [f(m.opacity), use_index(&uses, &m.opacity_texture), 0, 0],
+                [
+                    f(m.opacity),
+                    use_index(&uses, &m.opacity_texture),
+                    u32::from(!m.double_sided),
+                    0,
+                ],
             ]);
         }
         if scene.features().attributes {
