@@ -31,6 +31,8 @@ pub struct LoadOptions {
     /// mip chains (the renderer's texture image), checked from each image's
     /// header before it is decoded; `u64::MAX` when no device is known.
     pub max_texture_bytes: u64,
+    /// Which of a glTF file's cameras to render from (`--camera`).
+    pub camera: gltf::CameraChoice,
 }
 
 impl Default for LoadOptions {
@@ -42,6 +44,7 @@ impl Default for LoadOptions {
             max_scene_bytes: guard::DEFAULT_MAX_SCENE_BYTES,
             max_triangles: guard::DEFAULT_MAX_TRIANGLES,
             max_texture_bytes: u64::MAX,
+            camera: gltf::CameraChoice::File,
         }
     }
 }
@@ -67,6 +70,11 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError>
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     let loaded = match ext.as_str() {
+        "json" if opts.camera != gltf::CameraChoice::File => {
+            let message =
+                "--camera chooses among a glTF file's cameras; a JSON scene has one camera";
+            return Err(SceneError::new(path, "camera", message));
+        }
         "json" => json::load(path, opts)?,
         "gltf" | "glb" => gltf::load(path, opts)?,
         _ => {

@@ -6,6 +6,7 @@
 //! One concept: `cargo test --test cpu gltf_loader::` (docs/tests.md).
 
 mod brdf;
+mod gltf_extensions;
 mod gltf_loader;
 mod json_textures;
 mod wgsl_shaders;
