@@ -427,6 +427,10 @@ struct RenderArgs {
     /// Image height in pixels (overrides the scene's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
+    /// A glTF file's camera: its index in `cameras`, its name, or `framing`
+    /// for the framing view (docs/gltf.md).
+    #[arg(long)]
+    camera: Option<String>,
     /// Vulkan device: an index from `penumbra devices`, or part of its name.
     #[arg(long)]
     device: Option<DeviceSelector>,
@@ -522,6 +526,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         output: out,
         width,
         height,
+        camera,
         device,
         shaders,
         validate,
@@ -629,6 +634,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         })?),
     };
     let mut load_options = limits.load_options(width, height);
+    if let Some(c) = &camera {
+        load_options.camera = loaders::gltf::CameraChoice::parse(c);
+    }
     if let Some(r) = &renderer {
         load_options.max_triangles = r.max_triangles();
         load_options.max_texture_bytes = r.texture_capacity();
@@ -749,21 +757,30 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
                 ("readback", t.readback),
                 ("write", write),
             ],
-            &format!("{width_note}{}", texture_note(s)),
+            &format!(
+                "{}{width_note}{}",
+                triangles_note(&scene_data),
+                texture_note(s.texture_bytes)
+            ),
         )
     );
     Ok(())
 }
 
 /// ` | textures N MiB (mip-maps included)` for a scene with textures.
-fn texture_note(s: &penumbra::frame::RenderStats) -> String {
-    if s.texture_bytes == 0 {
+fn texture_note(bytes: u64) -> String {
+    if bytes == 0 {
         return String::new();
     }
     format!(
         " | textures {:.2} MiB (mip-maps included)",
-        s.texture_bytes as f64 / 1048576.0
+        bytes as f64 / 1048576.0
     )
+}
+
+/// ` | N triangles`: the scene's, glTF instances expanded (issue 39).
+fn triangles_note(scene: &penumbra::scene::Scene) -> String {
+    format!(" | {} triangles", scene.triangle_count())
 }
 
 /// `penumbra render --batch LIST -o DIR`: every scene of the list with one
@@ -883,7 +900,11 @@ fn render_reference(
                 ("render", s.timings.render),
                 ("write", write),
             ],
-            "",
+            &format!(
+                "{}{}",
+                triangles_note(scene),
+                texture_note(scene.textures.iter().map(|t| t.device_bytes()).sum())
+            ),
         )
     );
     Ok(())

@@ -1305,6 +1305,41 @@ fn gltf_quantized_meshopt_and_instancing_errors_name_the_files_field() {
 }
 
 #[test]
+fn camera_option_names_the_cameras_a_file_has() {
+    // BoxTextured places no camera: --camera 2 has none to pick.
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/BoxTextured/BoxTextured.gltf");
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&data, out_dir.path(), &["--camera", "2"]), &[]);
+    let at = format!("{}: cameras: ", data.display());
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            &at,
+            "--camera 2: no node of the default scene places cameras[2]",
+            "--camera framing",
+        ],
+    );
+    // A JSON scene has one camera.
+    let scene = scene_file("scene.json", mutated(|_| {}));
+    let out = penumbra(
+        &render_args(&scene.path, out_dir.path(), &["--camera", "framing"]),
+        &[],
+    );
+    let at = format!("{}: camera: ", scene.path.display());
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[&at, "--camera chooses among a glTF file's cameras"],
+    );
+}
+
+#[test]
 fn gltf_validation_errors_name_the_primitive_not_the_scene_object() {
     // Scaled by 1e20, the box lies beyond what the kernel's f32 holds; the
     // scene's validation finds it as objects[0].positions[0].

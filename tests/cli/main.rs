@@ -15,6 +15,7 @@ mod escaping;
 mod farm_batch;
 mod farm_slurm;
 mod farm_split;
+mod gltf_render;
 mod json_textures;
 mod metrics;
 mod setup_script;
