@@ -333,10 +333,12 @@ impl Reader<'_> {
             };
         let name = self.file.file_name().unwrap_or(self.file.as_os_str());
         let label = format!("{} {field}", name.to_string_lossy());
-        let mut texture = texture::decode(&bytes, mime, &label, srgb, self.guard)
-            .map_err(|e| self.err(at, e.0))?;
-        texture.file = file;
-        self.doc.textures.push(texture);
+        // Checked and charged now, decoded with the others after the walk
+        // (in parallel: module `decode`).
+        let pending = texture::prepare(bytes.into_owned(), mime, &label, srgb, self.guard)
+            .map_err(|e| self.err(&at, e.0))?;
+        self.pending.push((self.doc.textures.len(), pending, at));
+        self.doc.textures.push(super::decode::placeholder(file));
         Ok(self.doc.textures.len() - 1)
     }
 }

@@ -13,6 +13,7 @@
 //! read, so no file content can make this module panic.
 
 mod cameras;
+mod decode;
 mod extensions;
 mod fields;
 pub mod framing;
@@ -281,11 +282,17 @@ fn read_scene(path: &Path, guard: &Guard) -> Result<(GltfDocument, Option<usize>
         at: String::new(),
         materials: Vec::new(),
         texture_ids: HashMap::new(),
+        pending: Vec::new(),
     };
     // The `gltf` crate's accessors unwrap what its validation should have
     // checked; should one still panic, it becomes an error naming the file
     // and the field being read rather than a crash.
-    let walked = crate::panics::catch(|| walk(&mut r, &document, blob));
+    let walked = crate::panics::catch(|| {
+        let (mut doc, scene) = walk(&mut r, &document, blob)?;
+        let pending = std::mem::take(&mut r.pending);
+        decode::images(&r, pending, &mut doc.textures)?;
+        Ok((doc, scene))
+    });
     match walked {
         Ok(result) => result,
         Err(panic) => Err(SceneError::new(
@@ -585,6 +592,9 @@ struct Reader<'a> {
     materials: Vec<Option<material::Material>>,
     /// The texture decoded from each (image, sRGB) pair.
     texture_ids: HashMap<(usize, bool), TextureId>,
+    /// Images checked and charged but not yet decoded: the texture they
+    /// become, and the field that names them.
+    pending: Vec<(TextureId, super::texture::Pending, String)>,
     /// The field being read, for an error should a dependency panic.
     at: String,
     /// One per `buffers[i]`, exactly `byteLength` long; empty for a
