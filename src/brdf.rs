@@ -9,7 +9,8 @@
 //!
 //! # Which BRDF the seminar's shading formula is
 //!
-//! The renderer (`shaders/shading/shader.wgsl`) adds, per point light,
+//! The renderer's built-in shading files (`shaders/shading/phong.wgsl`, and
+//! `shaders/shading/blinn_phong.wgsl` for Blinn-Phong) add, per point light,
 //!
 //! ```text
 //! colour = falloff · (k_d·I_d·max(0, l·n) + k_s·I_s·max(0, r·v)^n_s)     (Phong)

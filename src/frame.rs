@@ -119,6 +119,17 @@ pub struct Sampling {
     pub time_budget: Option<Duration>,
 }
 
+impl Sampling {
+    /// The one check of `spp` in the library (the command line checks its
+    /// arguments against the same [`MAX_SPP`]): `Err` says what is wrong.
+    pub fn check(&self) -> Result<(), String> {
+        match (1..=MAX_SPP).contains(&self.spp) {
+            true => Ok(()),
+            false => Err(format!("must be in 1..={MAX_SPP}, got {}", self.spp)),
+        }
+    }
+}
+
 impl Default for Sampling {
     fn default() -> Self {
         Sampling {

@@ -21,7 +21,7 @@
 //! use penumbra::{loaders, render::{Renderer, RendererOptions}};
 //! let loaded = loaders::load_scene(std::path::Path::new("scenes/showcase.json"), &Default::default())?;
 //! let mut renderer = Renderer::new(&RendererOptions::default())?;
-//! let frame = renderer.render(&loaded.scene)?;
+//! let frame = renderer.render_scene(&loaded.scene)?;
 //! penumbra::output::write_image(std::path::Path::new("showcase.png"), &frame.image)?;
 //! # Ok::<(), anyhow::Error>(())
 //! ```
@@ -42,5 +42,6 @@ pub mod terminal;
 pub mod vector_width;
 pub mod vulkan;
 pub mod watch;
+pub mod wgsl;
 
 pub use error::SceneError;

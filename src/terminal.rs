@@ -33,7 +33,7 @@ pub fn escape(text: &str) -> String {
 
 /// Whether `line` is one of the lines that follow a shader error's first
 /// line: the source line (` 12 | …`) or the caret line (`    | ^^^`), as
-/// [`crate::scene::shading::wgsl::ShaderFileError`] writes them.
+/// [`crate::wgsl::ShaderFileError`] writes them.
 fn is_source_line(line: &str) -> bool {
     let Some(rest) = line.strip_prefix(' ') else {
         return false;

@@ -26,7 +26,7 @@ fn staging_path_round_trip_dispatch_and_renders() {
     };
     let mapped = Renderer::new(&options)
         .expect("a Vulkan device")
-        .render(&showcase)
+        .render_scene(&showcase)
         .expect("mapped render");
 
     std::env::set_var("PENUMBRA_FORCE_STAGING", "1");
@@ -77,7 +77,7 @@ fn staging_path_round_trip_dispatch_and_renders() {
     // (tests/gpu/bunny.rs).
     let staged = Renderer::new(&options)
         .expect("a Vulkan device")
-        .render(&showcase)
+        .render_scene(&showcase)
         .expect("staging render");
     assert_eq!(staged.image.pixels, mapped.image.pixels);
     assert_eq!(staged.stats.shadow_rays, mapped.stats.shadow_rays);

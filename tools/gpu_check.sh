@@ -5,12 +5,12 @@
 # knobs and the peers. Everything it prints and writes goes to OUT.
 #
 #   cargo build --release --workspace --all-targets && cargo test --release --no-run
-#   tools/ab_commits.sh --build 7031ecb        # the megakernel's `ab` (prints its path)
+#   tools/measure/ab_commits.sh --build 7031ecb        # the megakernel's `ab` (prints its path)
 #   tools/gpu_check.sh OUT
 #
 # BIN (default target/release) holds penumbra, ab, stage_times and bench, and BIN/deps the
 # test binaries gpu-* and vulkan_staging-* (the newest of each); AB_MEGA is the megakernel's
-# `ab` (default: tools/ab_commits.sh --build 7031ecb) and MEGA_SHADERS its shader tree
+# `ab` (default: tools/measure/ab_commits.sh --build 7031ecb) and MEGA_SHADERS its shader tree
 # (default: the scratch worktree beside it). A machine without cargo (a lent GPU machine)
 # takes binaries built elsewhere this way. The validation layer must be installed (Debian's
 # vulkan-validationlayers; VK_LAYER_PATH may point at an unpacked copy).
@@ -21,7 +21,7 @@ mkdir -p "$out"
 exec > >(tee "$out/gpu_check.log") 2>&1
 bin=${BIN:-target/release}
 newest() { ls -t "$bin"/deps/"$1"-* 2>/dev/null | grep -v '\.d$' | head -1; }
-mega=${AB_MEGA:-$(tools/ab_commits.sh --build 7031ecb)}
+mega=${AB_MEGA:-$(tools/measure/ab_commits.sh --build 7031ecb)}
 mega_shaders=${MEGA_SHADERS:-target/ab_commits/$(git rev-parse 7031ecb)/shaders}
 t0=$(date +%s)
 step() { echo "[$(($(date +%s) - t0)) s] $*"; }

@@ -29,7 +29,7 @@
 # mirror address is written here. Idempotent: a second run changes nothing.
 set -euo pipefail
 
-want_bench=0 # --bench: the benchmark's peers (tools/peers/setup.sh)
+want_bench=0 # --bench: the benchmark's peers (tools/measure/peers/setup.sh)
 want_layers=0
 dry_run=0
 for arg in "$@"; do
@@ -217,7 +217,7 @@ if ! command -v cargo >/dev/null; then
 fi
 
 # --bench: Mitsuba 3 and Embree for the benchmark's peer figures, in a venv under target/
-# (tools/peers/setup.sh says what and why).
+# (tools/measure/peers/setup.sh says what and why).
 if [ "$want_bench" = 1 ]; then
-  "$(dirname "$0")/peers/setup.sh"
+  "$(dirname "$0")/measure/peers/setup.sh"
 fi

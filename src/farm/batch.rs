@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::loaders::{self, LoadOptions};
-use crate::render::{Renderer, Sampling};
+use crate::render::{RenderRequest, Renderer, Sampling};
 
 use super::split::Tile;
 
@@ -151,7 +151,11 @@ pub fn render_entry(
         .map_err(|e| scene_error(&entry.scene, e))?;
     let (w, h) = uploaded.size();
     let frame = renderer
-        .render_progressive(&uploaded, w, h, &settings.sampling, &mut |_| {})
+        .render(
+            &uploaded,
+            RenderRequest::progressive(w, h, &settings.sampling, &mut |_| {}),
+        )
+        .map(|r| r.frame)
         .map_err(|e| scene_error(&entry.scene, e))?;
     crate::output::write_image(&entry.output, &frame.image)?;
     Ok(())

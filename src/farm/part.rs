@@ -43,6 +43,33 @@ pub struct PartInfo {
     pub rows: Range<u32>,
 }
 
+impl PartInfo {
+    /// The part `tile` × `passes` of the render `render` (its identity) of
+    /// `scene` under `settings`: its rows follow from the tile and the image
+    /// height. An error when the image has too few rows for the tiles.
+    pub fn new(
+        render: String,
+        scene: &Path,
+        tile: Tile,
+        passes: Passes,
+        settings: &super::identity::RenderSettings,
+    ) -> Result<PartInfo, String> {
+        Ok(PartInfo {
+            render,
+            scene: scene
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            tile,
+            passes,
+            spp: settings.spp,
+            width: settings.width,
+            height: settings.height,
+            rows: tile.rows(settings.height)?,
+        })
+    }
+}
+
 const RENDER: &str = "penumbra.render";
 const SCENE: &str = "penumbra.scene";
 const TILE: &str = "penumbra.tile";

@@ -234,7 +234,7 @@ fn describe(v: &serde_json::Value) -> String {
 }
 
 /// The WGSL files read so far, by resolved path: text and reflection.
-type WgslFiles = BTreeMap<PathBuf, (String, crate::scene::shading::Reflection)>;
+type WgslFiles = BTreeMap<PathBuf, (String, crate::wgsl::Reflection)>;
 
 struct Reader<'a> {
     file: &'a Path,
@@ -387,7 +387,7 @@ impl Reader<'_> {
         base: &Path,
         guard: &super::guard::Guard,
         read: &mut WgslFiles,
-    ) -> Result<(PathBuf, String, crate::scene::shading::Reflection), SceneError> {
+    ) -> Result<(PathBuf, String, crate::wgsl::Reflection), SceneError> {
         let field = format!("{at}.file");
         let path = base.join(rel);
         if let Some((source, r)) = read.get(&path) {
@@ -396,17 +396,9 @@ impl Reader<'_> {
         if !path.exists() {
             return Err(self.err(field, format!("no such file: {}", path.display())));
         }
-        let bytes = guard
-            .read(&path, "shader file")
-            .map_err(|e| self.err(&field, e.0))?;
-        let source = String::from_utf8(bytes).map_err(|e| {
-            self.err(
-                &field,
-                format!("cannot read shader file {}: {e}", path.display()),
-            )
-        })?;
-        let r = crate::scene::shading::reflect(&path, &source)
-            .map_err(|e| self.err(&field, e.to_string()))?;
+        let source = super::read_shader_file(&path, guard).map_err(|e| self.err(&field, e.0))?;
+        let r =
+            crate::wgsl::reflect(&path, &source).map_err(|e| self.err(&field, e.to_string()))?;
         read.insert(path.clone(), (source.clone(), r.clone()));
         Ok((path, source, r))
     }
@@ -952,35 +944,64 @@ impl Reader<'_> {
     fn light(&self, i: usize, l: &LightFile) -> Result<Light, SceneError> {
         let at = format!("lights[{i}]");
         let f = |k: &str| format!("{at}.{k}");
-        let (kind_name, needs_pos, needs_dir, spot) = match l.kind {
-            LightType::Directional => ("a directional light", false, true, false),
-            LightType::Point => ("a point light", true, false, false),
-            LightType::Spot => ("a spot light", true, true, true),
-            LightType::Rect => ("a rect light", false, false, false),
-            LightType::Sphere => ("a sphere light", false, false, false),
+        // Every field by name, without `..`: a field added to LightFile is a
+        // compile error here until this function reads it.
+        let LightFile {
+            kind: light_type,
+            position,
+            direction,
+            inner_angle,
+            outer_angle,
+            corner,
+            edge1,
+            edge2,
+            center,
+            radius,
+            samples,
+            intensity,
+            ambient,
+            diffuse,
+            specular,
+        } = l;
+        // Which of the kind-specific fields each kind takes: one exhaustive
+        // match, so that a new kind must say.
+        let (kind_name, needs_pos, needs_dir, spot, rect, sphere, area) = match light_type {
+            LightType::Directional => (
+                "a directional light",
+                false,
+                true,
+                false,
+                false,
+                false,
+                false,
+            ),
+            LightType::Point => ("a point light", true, false, false, false, false, false),
+            LightType::Spot => ("a spot light", true, true, true, false, false, false),
+            LightType::Rect => ("a rect light", false, false, false, true, false, true),
+            LightType::Sphere => ("a sphere light", false, false, false, false, true, true),
         };
-        let (rect, sphere) = (l.kind == LightType::Rect, l.kind == LightType::Sphere);
         fields_for(
             self.file,
             &at,
             kind_name,
             &[
-                ("position", l.position.is_some(), needs_pos),
-                ("direction", l.direction.is_some(), needs_dir),
-                ("inner_angle", l.inner_angle.is_some(), spot),
-                ("outer_angle", l.outer_angle.is_some(), spot),
-                ("corner", l.corner.is_some(), rect),
-                ("edge1", l.edge1.is_some(), rect),
-                ("edge2", l.edge2.is_some(), rect),
-                ("center", l.center.is_some(), sphere),
-                ("radius", l.radius.is_some(), sphere),
+                ("position", position.is_some(), needs_pos),
+                ("direction", direction.is_some(), needs_dir),
+                ("inner_angle", inner_angle.is_some(), spot),
+                ("outer_angle", outer_angle.is_some(), spot),
+                ("corner", corner.is_some(), rect),
+                ("edge1", edge1.is_some(), rect),
+                ("edge2", edge2.is_some(), rect),
+                ("center", center.is_some(), sphere),
+                ("radius", radius.is_some(), sphere),
             ],
         )?;
-        if l.samples.is_some() && !(rect || sphere) {
+        // Optional for an area light, not a field of the others.
+        if samples.is_some() && !area {
             return Err(self.err(f("samples"), format!("not a field of {kind_name}")));
         }
-        let samples = || {
-            let n = l.samples.unwrap_or(DEFAULT_LIGHT_SAMPLES);
+        let sample_count = || {
+            let n = samples.unwrap_or(DEFAULT_LIGHT_SAMPLES);
             if n == 0 || n > MAX_LIGHT_SAMPLES {
                 return Err(self.err(
                     f("samples"),
@@ -989,15 +1010,15 @@ impl Reader<'_> {
             }
             Ok(n)
         };
-        let pos = || self.finite(&f("position"), l.position.unwrap_or_default());
-        let dir = || self.direction(&f("direction"), l.direction.unwrap_or_default());
-        let kind = match l.kind {
+        let pos = || self.finite(&f("position"), position.unwrap_or_default());
+        let dir = || self.direction(&f("direction"), direction.unwrap_or_default());
+        let kind = match light_type {
             LightType::Directional => LightKind::Directional { direction: dir()? },
             LightType::Point => LightKind::Point { position: pos()? },
             LightType::Spot => {
                 let (inner, outer) = (
-                    l.inner_angle.unwrap_or_default(),
-                    l.outer_angle.unwrap_or_default(),
+                    inner_angle.unwrap_or_default(),
+                    outer_angle.unwrap_or_default(),
                 );
                 if !(outer > 0.0 && outer <= 90.0) {
                     return Err(self.err(
@@ -1019,30 +1040,30 @@ impl Reader<'_> {
                 }
             }
             LightType::Rect => {
-                let corner = self.finite(&f("corner"), l.corner.unwrap_or_default())?;
-                let edge1 = self.finite(&f("edge1"), l.edge1.unwrap_or_default())?;
-                let edge2 = self.finite(&f("edge2"), l.edge2.unwrap_or_default())?;
+                let corner = self.finite(&f("corner"), corner.unwrap_or_default())?;
+                let edge1 = self.finite(&f("edge1"), edge1.unwrap_or_default())?;
+                let edge2 = self.finite(&f("edge2"), edge2.unwrap_or_default())?;
                 // Zero area is checked with the scene (Scene::validate).
                 LightKind::Rect {
                     corner,
                     edge1,
                     edge2,
-                    samples: samples()?,
+                    samples: sample_count()?,
                 }
             }
             LightType::Sphere => {
-                let radius = l.radius.unwrap_or_default();
+                let radius = radius.unwrap_or_default();
                 if !(radius > 0.0 && radius.is_finite()) {
                     return Err(self.err(f("radius"), format!("must be positive, got {radius}")));
                 }
                 LightKind::Sphere {
-                    center: self.finite(&f("center"), l.center.unwrap_or_default())?,
+                    center: self.finite(&f("center"), center.unwrap_or_default())?,
                     radius,
-                    samples: samples()?,
+                    samples: sample_count()?,
                 }
             }
         };
-        let intensity = l.intensity.unwrap_or(1.0);
+        let intensity = intensity.unwrap_or(1.0);
         if !(intensity >= 0.0 && intensity.is_finite()) {
             return Err(self.err(
                 f("intensity"),
@@ -1052,9 +1073,9 @@ impl Reader<'_> {
         Ok(Light {
             kind,
             intensity,
-            ambient: self.colour(&f("ambient"), l.ambient.unwrap_or_default())?,
-            diffuse: self.colour(&f("diffuse"), l.diffuse.unwrap_or([1.0; 3]))?,
-            specular: self.colour(&f("specular"), l.specular.unwrap_or([1.0; 3]))?,
+            ambient: self.colour(&f("ambient"), ambient.unwrap_or_default())?,
+            diffuse: self.colour(&f("diffuse"), diffuse.unwrap_or([1.0; 3]))?,
+            specular: self.colour(&f("specular"), specular.unwrap_or([1.0; 3]))?,
         })
     }
 

@@ -96,3 +96,12 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError>
 pub(crate) fn override_size(opts: &LoadOptions, width: u32, height: u32) -> (u32, u32) {
     (opts.width.unwrap_or(width), opts.height.unwrap_or(height))
 }
+
+/// Reads a user's shader file through `guard` (its checks and budget) as
+/// UTF-8 text: the one reader of shader files, at load and at reload
+/// (`penumbra watch`).
+pub fn read_shader_file(path: &Path, guard: &guard::Guard) -> Result<String, guard::Refused> {
+    let bytes = guard.read(path, "shader file")?;
+    String::from_utf8(bytes)
+        .map_err(|e| guard::Refused(format!("cannot read shader file {}: {e}", path.display())))
+}

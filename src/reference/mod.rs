@@ -65,7 +65,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::frame::{Aovs, Frame, Image, RenderStats, Sampler, Sampling, Timings, MAX_SPP};
+use crate::frame::{Aovs, Frame, Image, RenderStats, Sampler, Sampling, Timings};
 use crate::scene::{Scene, Shader, Shape};
 
 /// A plane: a point on it and its unit normal.
@@ -290,15 +290,13 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
 ///
 /// # Panics
 ///
-/// If `sampling.spp` is not in `1..=MAX_SPP` (the command line rejects such
+/// If `sampling.spp` is not in `1..=MAX_SPP` ([`Sampling::check`]) (the command line rejects such
 /// values before), or if the scene uses a WGSL shader ([`supports`], which
 /// the command line checks before).
 pub fn render(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> Frame {
-    assert!(
-        (1..=MAX_SPP).contains(&sampling.spp),
-        "spp must be in 1..={MAX_SPP}, got {}",
-        sampling.spp
-    );
+    if let Err(why) = sampling.check() {
+        panic!("spp {why}");
+    }
     if let Err(why) = supports(scene) {
         panic!("{why}");
     }

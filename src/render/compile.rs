@@ -141,7 +141,7 @@ impl Assembled {
                 message,
             };
         };
-        let boundary = |i: usize| crate::scene::shading::scan::floor_char_boundary(&self.text, i);
+        let boundary = |i: usize| crate::wgsl::scan::floor_char_boundary(&self.text, i);
         let start = boundary(loc.offset as usize);
         let end = boundary(start + loc.length as usize);
         let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
@@ -163,7 +163,7 @@ impl Assembled {
     /// turns a storage buffer into a uniform, say) would otherwise reach the
     /// driver, which may crash on it.
     fn check_bindings(&self, module: &naga::Module) -> Result<(), CompileError> {
-        use super::BindingType as B;
+        use crate::vulkan::BindingType as B;
         for (handle, var) in module.global_variables.iter() {
             let Some(rb) = &var.binding else {
                 continue;
@@ -314,15 +314,16 @@ impl Assembled {
     /// renderer or a `watch` loop.
     ///
     /// It runs on a thread whose stack holds naga's deepest recursion on a
-    /// shader file within the limits (crate::scene::shading::stack).
+    /// shader file within the limits (crate::wgsl::stack).
     pub fn compile_entry(&self, key: &StageKernel, entry: &str) -> Result<Vec<u32>, CompileError> {
-        crate::scene::shading::stack::on_parse_stack(|| self.compile_unguarded(key, entry))
-            .unwrap_or_else(|panic| {
+        crate::wgsl::stack::on_parse_stack(|| self.compile_unguarded(key, entry)).unwrap_or_else(
+            |panic| {
                 Err(CompileError {
                     location: self.subject(),
                     message: format!("internal error in naga ({panic}); please report this shader"),
                 })
-            })
+            },
+        )
     }
 
     /// [`Assembled::compile_entry`] without the panic guard.
@@ -358,7 +359,7 @@ impl Assembled {
         let info = validator().validate(&module).map_err(|e| {
             self.error_at(
                 e.location(&self.text),
-                crate::scene::shading::wgsl::error_chain(e.as_inner()),
+                crate::wgsl::reflect::error_chain(e.as_inner()),
             )
         })?;
         self.check_bindings(&module)?;
@@ -434,7 +435,7 @@ impl Assembled {
 
 /// naga's validator with the flags and capabilities of the renderer's
 /// modules (also what a user's shader file is validated with when it is
-/// read, crate::scene::shading::wgsl).
+/// read, crate::wgsl).
 pub fn validator() -> naga::valid::Validator {
     use naga::valid::{Capabilities, ValidationFlags, Validator};
     let mut validator = Validator::new(

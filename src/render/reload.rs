@@ -4,8 +4,8 @@
 
 use std::time::Duration;
 
-use super::shade::Materials;
-use super::{CompileError, KernelOptions, RenderError, Renderer, UploadedScene};
+use super::shade::{Materials, UserTexts};
+use super::{RenderError, Renderer, UploadedScene};
 
 /// What a reload recompiled and what it cost.
 #[derive(Clone, Debug, Default)]
@@ -22,48 +22,43 @@ pub struct ReloadReport {
 }
 
 impl Renderer {
-    /// Re-reads the shader files after an edit and recompiles the pipelines
-    /// `scene` needs whose files changed (the scene upload is kept; hit
-    /// records are kept too when only shade pipelines changed). On failure
-    /// the pipelines that failed keep their last good versions, so the next
-    /// render still works. After a successful reload, renders of `scene` at
-    /// the size, seed and sample of a previous render reuse its hit records
-    /// when no stage before shading changed ([`super::RenderStats::hits_reused`]).
+    /// Reads the engine's shader files again after an edit, takes the user's
+    /// shader files as `user` holds them (the loader read them again through
+    /// its guard: [`crate::loaders::read_shader_file`];
+    /// [`UploadedScene::user_shader_files`] lists them), and recompiles the
+    /// pipelines `scene` needs whose files changed (the scene upload is
+    /// kept; hit records are kept too when only shade pipelines changed).
+    /// On failure the pipelines that failed keep their last good versions,
+    /// so the next render still works; [`RenderError::ParamsChanged`] says
+    /// that the scene must be loaded again. After a successful reload,
+    /// renders of `scene` at the size, seed and sample of a previous render
+    /// reuse its hit records when no stage before shading changed
+    /// ([`super::RenderStats::hits_reused`]).
     pub fn reload_shaders(
         &mut self,
         scene: &mut UploadedScene,
+        user: &UserTexts,
     ) -> Result<ReloadReport, RenderError> {
-        let kernel = KernelOptions {
-            accel: scene.kernel.accel,
-            ..self.kernel
-        };
         // The shader files' texts (and Params) as they are now.
-        let materials = Materials::new(&scene.shaders, &scene.texture_uses, &self.shaders, true)?;
+        let materials = Materials::new(
+            &scene.shaders,
+            &scene.texture_uses,
+            &self.shaders,
+            Some(user),
+        )?;
         // The parameter words were uploaded for the Params the files had.
         for (new, old) in materials.programs.iter().zip(&scene.materials.programs) {
             if new.fields != old.fields {
-                return Err(RenderError::Compile(CompileError {
-                    location: new.file.label(),
-                    message: format!(
-                        "{}: save the scene file to reload it",
-                        super::shade::PARAMS_CHANGED
-                    ),
-                }));
+                return Err(RenderError::ParamsChanged {
+                    file: new.file.label(),
+                });
             }
         }
         self.reuse_hits = false;
         let old = std::mem::replace(&mut scene.materials, materials);
         // Watch renders one sample per pixel without AOVs.
-        let mut settings = super::Settings::new(1, false, scene.light_samples);
-        settings.fused_shadows &= self.fuse_shadows;
-        let settings = self.with_device(settings);
-        let key = super::StageKernel {
-            features: scene.features,
-            settings,
-            options: kernel,
-        };
-        let compiled = self.frame_pipelines(scene, key, true);
-        match compiled {
+        let key = self.stage_kernel(scene, 1, false);
+        match self.frame_pipelines(scene, key, true) {
             Ok(c) => {
                 // The next renders of this upload may reuse their hits (the
                 // key keeps them from doing so if a traversal stage changed).

@@ -14,13 +14,10 @@ use std::path::PathBuf;
 
 use super::compile::{Assembled, CompileError, ShaderSource};
 use super::stages::SHADE_PRELUDE;
-use crate::scene::shading::wgsl::{reflect, ParamField, ParamType, ShaderFileError};
+use super::RenderError;
+use crate::scene::shading::{ParamField, ParamType};
 use crate::scene::Features;
-
-/// How a reload's error starts when a user shader file's `struct Params`
-/// no longer matches the parameters uploaded with the scene (`penumbra
-/// watch` then reloads the scene).
-pub const PARAMS_CHANGED: &str = "its Params changed since the scene was loaded";
+use crate::wgsl::{reflect, ShaderFileError};
 
 /// The shade stage's entry point (`shaders/stages/shade.wgsl`).
 pub const SHADE_ENTRY_POINT: &str = "penumbra_shade_stage";
@@ -85,14 +82,19 @@ pub struct ShadeSource {
     pub has_ambient: bool,
 }
 
-/// Reads the text of `file`: built-ins through `source`, user files from
-/// disk.
+/// The texts of the user's shader files as the loader read them again
+/// (a reload), by path.
+pub type UserTexts = std::collections::BTreeMap<PathBuf, String>;
+
+/// Reads the text of a built-in `file` through `source`. A user file's
+/// text comes from the loader (the scene's [`crate::scene::WgslShader`], or
+/// [`UserTexts`] on a reload): the renderer reads no user file itself.
 pub fn read_program(source: &ShaderSource, file: &ProgramFile) -> Result<String, CompileError> {
     match file {
         ProgramFile::Builtin(name) => source.read(name).map(|(_, text)| text),
-        ProgramFile::User(path) => std::fs::read_to_string(path).map_err(|e| CompileError {
+        ProgramFile::User(path) => Err(CompileError {
             location: path.display().to_string(),
-            message: format!("cannot read shader: {e}"),
+            message: "a user's shader file is read by the loader".into(),
         }),
     }
 }
@@ -107,7 +109,7 @@ pub fn assemble(
     let label = file.label_in(source);
     assembled.push_file(label.clone(), text);
     assembled.subject = Some(label.clone());
-    // What the file declares (crate::scene::shading::wgsl, which also
+    // What the file declares (crate::wgsl, which also
     // checks `shade` and `ambient`); a file without Params gets the
     // placeholder that `shade` still takes.
     let declared = reflect(std::path::Path::new(&label), text).map_err(file_error)?;
@@ -279,16 +281,17 @@ pub struct Materials {
 impl Materials {
     /// The programs and parameters of `shaders`, reading the built-in files
     /// through `source`. User files are taken as the scene loaded them
-    /// (validated against their parameters), or with `reread` from disk (a
-    /// reload after an edit).
+    /// (validated against their parameters), or, on a reload after an edit,
+    /// as `reread` holds them (read again by the loader, through its guard:
+    /// [`crate::loaders::read_shader_file`]).
     /// `uses` is the scene's [`crate::scene::Scene::texture_uses`]: a
     /// texture parameter's word is its index there.
     pub fn new(
         shaders: &[crate::scene::Shader],
         uses: &[crate::scene::TextureRef],
         source: &ShaderSource,
-        reread: bool,
-    ) -> Result<Materials, CompileError> {
+        reread: Option<&UserTexts>,
+    ) -> Result<Materials, RenderError> {
         use crate::scene::Shader;
         let mut m = Materials::default();
         for sh in shaders {
@@ -304,8 +307,17 @@ impl Materials {
             let program = match m.programs.iter().position(|p| p.file == file) {
                 Some(i) => i,
                 None => {
-                    let text = match sh {
-                        Shader::Wgsl(w) if !reread => w.source.clone(),
+                    let text = match (sh, reread) {
+                        (Shader::Wgsl(w), None) => w.source.clone(),
+                        (Shader::Wgsl(w), Some(texts)) => match texts.get(&w.path) {
+                            Some(text) => text.clone(),
+                            None => {
+                                return Err(RenderError::Compile(CompileError {
+                                    location: file.label(),
+                                    message: "the shader file was not read again".into(),
+                                }))
+                            }
+                        },
                         _ => read_program(source, &file)?,
                     };
                     let fields = assemble(source, &file, &text)?.fields;
@@ -326,10 +338,7 @@ impl Materials {
                     // The scene's values were checked against the Params the
                     // file had when it was loaded.
                     if w.fields != m.programs[program].fields {
-                        return Err(CompileError {
-                            location: label,
-                            message: format!("{PARAMS_CHANGED}: save the scene file to reload it"),
-                        });
+                        return Err(RenderError::ParamsChanged { file: label });
                     }
                     w.words(|t| crate::scene::Scene::texture_use_index(uses, t))
                 }

@@ -2,9 +2,10 @@
 //! device when its file changes, without re-uploading the scene or
 //! recompiling anything.
 
+use super::bindings::Bound;
 use super::layout::textures::texture_words;
 use super::stages::Binding;
-use super::{Bound, RenderError, Renderer, UploadedScene};
+use super::{RenderError, Renderer, UploadedScene};
 use crate::scene::{Texture, TextureId};
 
 impl Renderer {
@@ -41,7 +42,7 @@ impl Renderer {
         let (mut words, _) = texture_words(texture);
         debug_assert_eq!(words.len(), chain.words);
         words.resize(words.len().next_multiple_of(4), 0);
-        let Bound::Image(image) = &scene.bound[Binding::TextureTexels as usize] else {
+        let Bound::Image(image) = scene.bound.get(Binding::TextureTexels) else {
             unreachable!("the texture texels are a texel image");
         };
         self.context

@@ -8,7 +8,8 @@ use glam::DVec3;
 
 use super::layout::{PushConstants, QueryHit, QueryRay};
 use super::stages::{Binding, Stage};
-use super::{BufferUsage, RenderError, Renderer, UploadedScene};
+use super::{RenderError, Renderer, UploadedScene};
+use crate::vulkan::BufferUsage;
 
 /// Rays per dispatch: 64 per workgroup, within every device's 65,535
 /// workgroups.
@@ -33,6 +34,33 @@ pub enum HitKind {
     Sphere,
     /// A triangle (single or from a mesh).
     Triangle,
+}
+
+/// A hit record's kind of primitive, as `shaders/stages/records.wgsl`
+/// numbers them (checked by `layout::tests::shared_constants_match_wgsl`).
+pub const KIND_PLANE: u32 = 0;
+/// See [`KIND_PLANE`].
+pub const KIND_SPHERE: u32 = 1;
+/// See [`KIND_PLANE`].
+pub const KIND_TRIANGLE: u32 = 2;
+
+impl HitKind {
+    /// Every kind (`layout::tests` checks that the WGSL has as many).
+    pub const ALL: [HitKind; 3] = [HitKind::Plane, HitKind::Sphere, HitKind::Triangle];
+
+    /// The kind's number in a hit record: one exhaustive `match`.
+    pub fn code(self) -> u32 {
+        match self {
+            HitKind::Plane => KIND_PLANE,
+            HitKind::Sphere => KIND_SPHERE,
+            HitKind::Triangle => KIND_TRIANGLE,
+        }
+    }
+
+    /// The kind numbered `code`; `None` for no hit or an unknown number.
+    pub fn from_code(code: u32) -> Option<HitKind> {
+        HitKind::ALL.into_iter().find(|k| k.code() == code)
+    }
 }
 
 /// The nearest hit of a traced ray.
@@ -91,24 +119,25 @@ impl Renderer {
                 BufferUsage::Storage,
                 (chunk.len() * 32) as u64,
             )?;
-            let mut refs: Vec<_> = scene.bound.iter().map(super::Bound::resource).collect();
-            refs[Binding::QueryRays as usize] = (&ray_buf).into();
-            refs[Binding::QueryHits as usize] = (&hit_buf).into();
+            let mut refs = scene.bound.resources();
+            refs.set(Binding::QueryRays, (&ray_buf).into());
+            refs.set(Binding::QueryHits, (&hit_buf).into());
             let push = PushConstants {
                 size: [chunk.len() as u32, 1],
                 ..Zeroable::zeroed()
             };
             let groups = [chunk.len().div_ceil(64) as u32, 1, 1];
-            ctx.dispatch(pipeline, &refs, bytemuck::bytes_of(&push), groups)?;
+            ctx.dispatch(
+                pipeline,
+                refs.in_binding_order(),
+                bytemuck::bytes_of(&push),
+                groups,
+            )?;
             let bytes = ctx.read_buffer(&hit_buf)?;
             let hits: Vec<QueryHit> = bytemuck::pod_collect_to_vec(&bytes[..chunk.len() * 32]);
             out.extend(hits.iter().map(|h| {
-                let kind = match h.kind {
-                    0 => HitKind::Plane,
-                    1 => HitKind::Sphere,
-                    _ => HitKind::Triangle,
-                };
-                (h.t >= 0.0 && h.kind != u32::MAX).then_some(TraceHit {
+                let kind = HitKind::from_code(h.kind).filter(|_| h.t >= 0.0)?;
+                Some(TraceHit {
                     t: h.t,
                     kind,
                     index: h.index,

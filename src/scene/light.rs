@@ -86,15 +86,43 @@ pub struct Light {
 impl LightKind {
     /// Whether this is an area light (sampled).
     pub fn is_area(&self) -> bool {
-        matches!(self, LightKind::Rect { .. } | LightKind::Sphere { .. })
+        self.samples().is_some()
+    }
+
+    /// The sample count of an area light; `None` for a punctual one. The
+    /// one exhaustive `match` that says which kinds are area lights.
+    pub fn samples(&self) -> Option<u32> {
+        match self {
+            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => Some(*samples),
+            LightKind::Directional { .. } | LightKind::Point { .. } | LightKind::Spot { .. } => {
+                None
+            }
+        }
     }
 
     /// Overrides the sample count of an area light (no effect on others).
     pub fn set_samples(&mut self, n: u32) {
-        if let LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } = self {
-            *samples = n;
+        match self {
+            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => *samples = n,
+            LightKind::Directional { .. } | LightKind::Point { .. } | LightKind::Spot { .. } => {}
         }
     }
+
+    /// The kind's `"type"` in a JSON scene (scenes/README.md): every kind
+    /// has one, and [`LightKind::TYPES`] lists them.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            LightKind::Directional { .. } => "directional",
+            LightKind::Point { .. } => "point",
+            LightKind::Spot { .. } => "spot",
+            LightKind::Rect { .. } => "rect",
+            LightKind::Sphere { .. } => "sphere",
+        }
+    }
+
+    /// Every kind's [`LightKind::type_name`], for the tests that each kind
+    /// is covered (tests/cpu/kinds.rs).
+    pub const TYPES: [&'static str; 5] = ["directional", "point", "spot", "rect", "sphere"];
 
     /// The KHR_lights_punctual cone attenuation for a spot light at
     /// `cos_angle` = cos of the angle between the cone axis and the direction

@@ -38,6 +38,24 @@ pub enum Shape {
     Mesh(Mesh),
 }
 
+impl Shape {
+    /// The shape's `"type"` in a JSON scene (scenes/README.md; a glTF file
+    /// gives meshes): one exhaustive `match`, and [`Shape::TYPES`] lists
+    /// them.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Shape::Plane(_) => "plane",
+            Shape::Sphere(_) => "sphere",
+            Shape::Triangle(_) => "triangle",
+            Shape::Mesh(_) => "mesh",
+        }
+    }
+
+    /// Every kind's [`Shape::type_name`], for the tests that each kind is
+    /// covered (tests/cpu/kinds.rs).
+    pub const TYPES: [&'static str; 4] = ["plane", "sphere", "triangle", "mesh"];
+}
+
 /// A shape with the shader that colours it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
@@ -233,7 +251,7 @@ impl Scene {
             .map(|o| match &o.shape {
                 Shape::Triangle(_) => 1,
                 Shape::Mesh(m) => m.indices.len(),
-                _ => 0,
+                Shape::Plane(_) | Shape::Sphere(_) => 0,
             })
             .sum()
     }

@@ -579,7 +579,7 @@ impl Context {
 
     /// The longest that one submission has run since the last call, from submit to its fence
     /// (the driver's compile at a pipeline's first dispatch included): how far the work stays
-    /// from [`Context::time_limit`] (tools/watchdog_margin.rs).
+    /// from [`Context::time_limit`] (tools/measure/watchdog_margin.rs).
     pub fn take_longest_wait(&self) -> Duration {
         Duration::from_nanos(
             self.longest_wait

@@ -19,7 +19,7 @@
 //! Cancellation: a change that arrives while the preview renders skips the
 //! full-resolution stage, and one that arrives during the full-resolution
 //! stage stops it between two bands of 64 rows
-//! ([`crate::render::Renderer::render_cancellable`]); the preview itself
+//! ([`crate::render::RenderRequest::cancellable`]); the preview itself
 //! always completes.
 
 pub mod files;

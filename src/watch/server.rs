@@ -119,7 +119,7 @@ pub fn parse_addr(s: &str) -> Result<SocketAddr, String> {
 }
 
 /// The server's bounds. [`Server::start`] uses the defaults; tests and
-/// tools/live_load.rs may set others.
+/// tools/measure/live_load.rs may set others.
 #[derive(Clone, Debug)]
 pub struct Limits {
     /// The most connections served at once, each on a thread of its own;

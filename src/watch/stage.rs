@@ -27,13 +27,15 @@ use std::time::{Duration, Instant};
 
 use super::files::normalise;
 use crate::loaders::{self, LoadOptions};
-use crate::render::shade::PARAMS_CHANGED;
-use crate::render::{Image, ReloadReport, RenderError, Renderer, UploadedScene};
+use crate::render::shade::UserTexts;
+use crate::render::{
+    CompileError, Image, ReloadReport, RenderError, RenderRequest, Renderer, UploadedScene,
+};
 use crate::scene::{Shader, Texture};
 
 /// Whether a reload failed because a user shader's `Params` changed.
 fn params_changed(e: &RenderError) -> bool {
-    matches!(e, RenderError::Compile(c) if c.message.starts_with(PARAMS_CHANGED))
+    matches!(e, RenderError::ParamsChanged { .. })
 }
 
 /// What changed since the last reload.
@@ -259,7 +261,20 @@ impl Session {
                 out.render = self.scene_error.is_none();
                 break;
             };
-            match self.renderer.reload_shaders(up) {
+            let guard = loaders::guard::Guard::new(&self.scene_path, &self.load);
+            let texts: Result<UserTexts, _> = up
+                .user_shader_files()
+                .into_iter()
+                .map(|p| loaders::read_shader_file(&p, &guard).map(|t| (p, t)))
+                .collect();
+            let reloaded = match texts {
+                Ok(texts) => self.renderer.reload_shaders(up, &texts),
+                Err(refused) => Err(RenderError::Compile(CompileError {
+                    location: "reload".into(),
+                    message: refused.0,
+                })),
+            };
+            match reloaded {
                 Ok(report) => {
                     self.shader_error = None;
                     // After a scene edit alone, report a compile only when
@@ -418,14 +433,13 @@ impl Session {
             let (sw, sh) = ((w / d).max(1), (h / d).max(1));
             // The first stage (the preview) always completes; later ones stop
             // between bands of rows as soon as a newer edit arrives.
-            let result = if i == 0 {
-                self.renderer.render_uploaded(up, sw, sh).map(Some)
-            } else {
-                self.renderer.render_cancellable(up, sw, sh, &mut cancel)
+            let request = match i {
+                0 => RenderRequest::new(sw, sh),
+                _ => RenderRequest::cancellable(sw, sh, &mut cancel),
             };
-            match result {
-                Ok(None) => return Ok(true),
-                Ok(Some(frame)) => {
+            match self.renderer.render(up, request).map(|r| r.frame) {
+                Err(RenderError::Cancelled) => return Ok(true),
+                Ok(frame) => {
                     let t = frame.stats.timings;
                     let c = CompileTimes {
                         naga: t.shader_compile,

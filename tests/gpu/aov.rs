@@ -86,8 +86,12 @@ fn depth_normal_uv_and_ids_match_the_geometry() {
     let (frame, aovs) = {
         let mut r = support::renderer();
         let up = r.upload(&s).unwrap();
-        r.render_with_aovs(&up, 120, 90, &Sampling::default(), &mut |_| {})
-            .unwrap()
+        r.render(
+            &up,
+            penumbra::render::RenderRequest::with_aovs(120, 90, &Sampling::default(), &mut |_| {}),
+        )
+        .map(|r| (r.frame, r.aovs.unwrap_or_default()))
+        .unwrap()
     };
     let c = &s.camera;
     let Shape::Sphere(sphere) = s.objects[1].shape else {
@@ -189,8 +193,12 @@ fn aovs_land_in_exr_channels() {
     let (frame, aovs) = {
         let mut r = support::renderer();
         let up = r.upload(&s).unwrap();
-        r.render_with_aovs(&up, 120, 90, &Sampling::default(), &mut |_| {})
-            .unwrap()
+        r.render(
+            &up,
+            penumbra::render::RenderRequest::with_aovs(120, 90, &Sampling::default(), &mut |_| {}),
+        )
+        .map(|r| (r.frame, r.aovs.unwrap_or_default()))
+        .unwrap()
     };
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("aov.exr");

@@ -38,8 +38,12 @@ fn progressive(r: &mut Renderer, scene: &Scene, spp: u32) -> (Frame, penumbra::r
         ..Default::default()
     };
     let (w, h) = (scene.camera.width, scene.camera.height);
-    r.render_with_aovs(&uploaded, w, h, &sampling, &mut |_| {})
-        .expect("render")
+    r.render(
+        &uploaded,
+        penumbra::render::RenderRequest::with_aovs(w, h, &sampling, &mut |_| {}),
+    )
+    .map(|r| (r.frame, r.aovs.unwrap_or_default()))
+    .expect("render")
 }
 
 #[test]
@@ -75,8 +79,12 @@ fn banded_images_and_aovs_equal_one_band() {
         passes: 0..3,
     };
     let got =
-        r.0.render_part(&uploaded, &part, &sampling, &mut |_| {})
-            .expect("part");
+        r.0.render(
+            &uploaded,
+            penumbra::render::RenderRequest::part(uploaded.size(), &part, &sampling, &mut |_| {}),
+        )
+        .map(|r| r.frame)
+        .expect("part");
     assert_eq!(got.image.height, 83);
     let want = &one.image.pixels[37 * 203..120 * 203];
     for (i, (g, w)) in got.image.pixels.iter().zip(want).enumerate() {
@@ -91,15 +99,28 @@ fn a_reused_frame_keeps_its_background_after_a_render_of_another_size() {
     let mut r = support::renderer();
     let mut uploaded = r.upload(&scene).expect("upload");
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let first = r.render_uploaded(&uploaded, w, h).expect("render");
+    let first = r
+        .render(&uploaded, penumbra::render::RenderRequest::new(w, h))
+        .map(|r| r.frame)
+        .expect("render");
     // A preview of another size in between, as `watch` renders them.
-    let preview = r.render_uploaded(&uploaded, w / 2, h / 2).expect("preview");
+    let preview = r
+        .render(
+            &uploaded,
+            penumbra::render::RenderRequest::new(w / 2, h / 2),
+        )
+        .map(|r| r.frame)
+        .expect("preview");
     assert_eq!(preview.image.width, w / 2);
     // No file changed: the reload recompiles nothing, and the next render of
     // the first size reuses its hit records (the hit stage, which writes
     // the background, does not run).
-    r.reload_shaders(&mut uploaded).expect("reload");
-    let again = r.render_uploaded(&uploaded, w, h).expect("render");
+    r.reload_shaders(&mut uploaded, &Default::default())
+        .expect("reload");
+    let again = r
+        .render(&uploaded, penumbra::render::RenderRequest::new(w, h))
+        .map(|r| r.frame)
+        .expect("render");
     assert!(again.stats.hits_reused, "the frame reuses its hit records");
     assert!(
         again.image.pixels == first.image.pixels,

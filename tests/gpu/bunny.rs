@@ -83,7 +83,7 @@ fn bvh_and_brute_force_and_both_triangle_orders_agree() {
                 triangle_test,
                 ..Default::default()
             });
-            let frame = r.render(&scene).expect("render");
+            let frame = r.render_scene(&scene).expect("render");
             r.set_kernel(before);
             images.push(frame.image);
         }

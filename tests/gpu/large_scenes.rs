@@ -72,7 +72,7 @@ fn a_million_triangles_render_with_a_bvh() {
     let mut r = support::renderer();
     let before = r.kernel();
     r.set_kernel(KernelOptions::default());
-    let frame = r.render(&scene);
+    let frame = r.render_scene(&scene);
     r.set_kernel(before);
     let frame = frame.expect("a million triangles render");
     let s = frame.stats;
@@ -126,7 +126,7 @@ fn triangles_beyond_max_storage_buffer_range_render() {
     let mut r = support::renderer();
     let before = r.kernel();
     r.set_kernel(KernelOptions::default());
-    let frame = r.render(&scene);
+    let frame = r.render_scene(&scene);
     r.set_kernel(before);
     let frame = frame.expect("a triangle image over 128 MiB renders");
     let hits = frame.image.pixels.iter().filter(|p| p[3] == 1.0).count();

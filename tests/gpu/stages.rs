@@ -33,7 +33,7 @@ impl Drop for Restore<'_> {
 fn render(r: &mut Restore, scene: &Scene, fused: bool) -> Frame {
     r.0.set_fused_shadows(fused);
     r.0.set_profile_stages(true);
-    r.0.render(scene).expect("render")
+    r.0.render_scene(scene).expect("render")
 }
 
 /// Renders `scene` with the records written as words or with texel stores.
@@ -44,7 +44,7 @@ fn render_words(r: &mut Restore, scene: &Scene, words: bool) -> Frame {
         words,
         "words where the device allows them"
     );
-    let frame = r.0.render(scene).expect("render");
+    let frame = r.0.render_scene(scene).expect("render");
     r.0.set_stage_words(true);
     frame
 }
@@ -172,7 +172,7 @@ fn pixels_by_subgroup_and_lane_give_the_invocation_index_image() {
         let mut frame = |lanes: bool| {
             r.0.set_lane_pixels(lanes);
             assert_eq!(r.0.lane_pixels(), lanes && cpu);
-            r.0.render(&scene).expect("render")
+            r.0.render_scene(&scene).expect("render")
         };
         let lanes = frame(cpu);
         let index = frame(false);

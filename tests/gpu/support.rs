@@ -44,7 +44,7 @@ pub fn renderer() -> std::sync::MutexGuard<'static, Renderer> {
 /// Renders a validated scene.
 pub fn render(scene: &Scene) -> Frame {
     scene.validate().expect("test scene is valid");
-    renderer().render(scene).expect("render")
+    renderer().render_scene(scene).expect("render")
 }
 
 /// Writes `json` to a fresh temporary directory as `scene.json` (plus any
@@ -95,7 +95,11 @@ pub fn render_with(
     r.set_kernel(kernel);
     let result = r.upload(scene).and_then(|up| {
         let (w, h) = up.size();
-        r.render_progressive(&up, w, h, &sampling, &mut |_| {})
+        r.render(
+            &up,
+            penumbra::render::RenderRequest::progressive(w, h, &sampling, &mut |_| {}),
+        )
+        .map(|r| r.frame)
     });
     r.set_kernel(before);
     result.expect("render")

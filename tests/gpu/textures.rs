@@ -499,9 +499,15 @@ fn a_replaced_texture_shows_in_the_next_render() {
     new.texels.reverse();
     let mut r = support::renderer();
     let mut up = r.upload(&s).unwrap();
-    let before = r.render_uploaded(&up, 16, 16).unwrap();
+    let before = r
+        .render(&up, penumbra::render::RenderRequest::new(16, 16))
+        .map(|r| r.frame)
+        .unwrap();
     r.replace_texture(&mut up, 0, &new).unwrap();
-    let after = r.render_uploaded(&up, 16, 16).unwrap();
+    let after = r
+        .render(&up, penumbra::render::RenderRequest::new(16, 16))
+        .map(|r| r.frame)
+        .unwrap();
     let bigger = Texture {
         width: 8,
         texels: vec![[0; 4]; 32],

@@ -25,7 +25,7 @@ impl Bound<'_> {
     fn render(&mut self, scene: &Scene, bound: u64) -> Frame {
         self.0.set_stage_memory(bound);
         assert_eq!(self.0.stage_memory(), bound);
-        let frame = self.0.render(scene).expect("render");
+        let frame = self.0.render_scene(scene).expect("render");
         let stats = &frame.stats;
         assert!(
             stats.stage_bytes <= bound,

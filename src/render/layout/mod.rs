@@ -447,6 +447,9 @@ mod tests {
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
+            ("KIND_PLANE", crate::render::trace::KIND_PLANE),
+            ("KIND_SPHERE", crate::render::trace::KIND_SPHERE),
+            ("KIND_TRIANGLE", crate::render::trace::KIND_TRIANGLE),
             ("UNIFORM_LIGHTS", lights::UNIFORM_LIGHTS as u32),
             (
                 "PRIMS_PER_TEXEL",
@@ -491,6 +494,22 @@ mod tests {
             };
             assert_eq!(wgsl, host, "{name}");
         }
+        // The other way round: every WGSL constant of the kinds and flags the
+        // host also numbers is in the list above, so a new `LIGHT_*` or
+        // `KIND_*` constant cannot go unchecked.
+        for (_, c) in module.constants.iter() {
+            let Some(name) = c.name.as_deref() else {
+                continue;
+            };
+            let numbered = ["LIGHT_", "KIND_", "FLAG_", "SHADER_", "PRIM_"]
+                .iter()
+                .any(|p| name.starts_with(p));
+            let shade_only = ["KIND_NONE", "PRIM_INDEX", "SHADER_NODE_TEXELS"].contains(&name);
+            assert!(
+                !numbered || shade_only || shared.iter().any(|(n, _)| *n == name),
+                "{name} is numbered in the WGSL but not checked against the host here"
+            );
+        }
         // Every primitive kind fits below the kind bits' all-ones value, so
         // that no hit's kind-and-object word is KIND_NONE (render::MAX_OBJECTS).
         let mut kinds = 0;
@@ -509,7 +528,11 @@ mod tests {
             assert!(kind < (1 << super::super::KIND_BITS) - 1, "{name} = {kind}");
             kinds += 1;
         }
-        assert_eq!(kinds, 3, "KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE");
+        assert_eq!(
+            kinds,
+            crate::render::trace::HitKind::ALL.len(),
+            "one KIND_ constant per HitKind"
+        );
         // PRIM_INDEX masks off exactly the two flag bits.
         let prim_index = module
             .constants

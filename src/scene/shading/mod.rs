@@ -1,7 +1,8 @@
 //! Shading models ("shaders" in the seminar): Phong, Blinn-Phong, the 3D
 //! checkerboard made of two sub-shaders, and shaders written as WGSL files
-//! ([`wgsl`]). The GPU versions of the built-in ones live in
-//! `shaders/shading/` under the same names.
+//! ([`wgsl`]; what such a file declares is read by [`crate::wgsl`]). The
+//! GPU versions of the built-in ones live in `shaders/shading/` under the
+//! same names.
 //!
 //! For each light the colour at a point is
 //! `k_a·I_a + [light visible]·(k_d·I_d·max(0, l·n) + k_s·I_s·max(0, r·v)^n_s)`
@@ -10,19 +11,12 @@
 
 pub mod blinn_phong;
 pub mod checker;
-pub mod footprint;
-pub mod lexer;
-pub mod limits;
 pub mod phong;
-pub mod scan;
-pub mod stack;
 pub mod wgsl;
 
 pub use checker::Checker;
 pub use phong::{Phong, PhongTextures};
-pub use wgsl::{
-    reflect, Location, ParamField, ParamType, ParamValue, Reflection, ShaderFileError, WgslShader,
-};
+pub use wgsl::{ParamField, ParamType, ParamValue, WgslShader};
 
 /// Index into [`crate::scene::Scene::shaders`].
 pub type ShaderId = usize;
@@ -38,4 +32,21 @@ pub enum Shader {
     Checker(Checker),
     /// A shader written as a WGSL file, with its `Params` values.
     Wgsl(WgslShader),
+}
+
+impl Shader {
+    /// The shader's `"type"` in a JSON scene (scenes/README.md): one
+    /// exhaustive `match`, and [`Shader::TYPES`] lists them.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Shader::Phong(_) => "phong",
+            Shader::BlinnPhong(_) => "blinn_phong",
+            Shader::Checker(_) => "checker",
+            Shader::Wgsl(_) => "wgsl",
+        }
+    }
+
+    /// Every kind's [`Shader::type_name`], for the tests that each kind is
+    /// covered (tests/cpu/kinds.rs).
+    pub const TYPES: [&'static str; 4] = ["phong", "blinn_phong", "checker", "wgsl"];
 }
