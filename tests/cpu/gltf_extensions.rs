@@ -728,3 +728,85 @@ fn a_flat_chart_is_seen_face_on_from_its_front() {
     let f = fill(&floor.scene.camera, lo, hi);
     assert!((0.80..=0.95).contains(&f), "fills {f}");
 }
+
+/// meshopt's filters: positions through the EXPONENTIAL filter (15-bit
+/// mantissas) and normals through the OCTAHEDRAL one (8-bit normalized
+/// bytes, as gltfpack `-cc` writes), both encoded here by the reference
+/// encoder; the loader's decode must give the positions within their
+/// mantissa's precision and the normals within the bytes' (a degree).
+#[test]
+fn meshopt_filters_decode_positions_and_normals() {
+    use meshopt::encoding::{encode_filter_exp, encode_filter_oct, EncodeExpMode};
+    let (vertices, indices) = grid();
+    let positions: Vec<[f32; 3]> = vertices.iter().map(|v| [v[0], v[1], v[2]]).collect();
+    // Unit normals tilted every way.
+    let normals: Vec<[f32; 4]> = vertices
+        .iter()
+        .map(|v| {
+            let n = glam::Vec3::new(v[0] - 1.4, v[1] - 1.3, 1.0).normalize();
+            [n.x, n.y, n.z, 0.0]
+        })
+        .collect();
+    let exp = encode_filter_exp(&positions, 15, EncodeExpMode::Separate);
+    let oct = encode_filter_oct::<i8>(&normals, 8);
+    let enc_p = meshopt::encoding::encode_vertex_buffer(&exp).unwrap();
+    let enc_n = meshopt::encoding::encode_vertex_buffer(&oct).unwrap();
+    let raw_i: Vec<u8> = indices.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut doc = Doc::new();
+    let (a, b) = (doc.view(&enc_p), doc.view(&enc_n));
+    let ix_view = doc.view(&raw_i);
+    let n = vertices.len();
+    let ext = |doc: &Doc, view: usize, len: usize, stride: usize, filter: &str| {
+        let v = &doc.root["bufferViews"][view];
+        json!({ "buffer": 1, "byteLength": stride * n, "byteStride": stride,
+                "extensions": { "EXT_meshopt_compression": {
+                    "buffer": 0, "byteOffset": v["byteOffset"], "byteLength": len,
+                    "byteStride": stride, "count": n, "mode": "ATTRIBUTES", "filter": filter } } })
+    };
+    doc.root["bufferViews"][a] = ext(&doc, a, enc_p.len(), 12, "EXPONENTIAL");
+    doc.root["bufferViews"][b] = ext(&doc, b, enc_n.len(), 4, "OCTAHEDRAL");
+    doc.root["extensionsUsed"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+    let p = doc.push(
+        "accessors",
+        json!({ "bufferView": a, "componentType": 5126, "count": n, "type": "VEC3",
+                "min": [0, 0, -1], "max": [3, 3, 1] }),
+    );
+    let nrm = doc.push(
+        "accessors",
+        json!({ "bufferView": b, "componentType": BYTE, "normalized": true, "count": n,
+                "type": "VEC3" }),
+    );
+    let ix = doc.push(
+        "accessors",
+        json!({ "bufferView": ix_view, "componentType": 5125, "count": indices.len(),
+                "type": "SCALAR" }),
+    );
+    doc.mesh_node(
+        json!([{ "attributes": { "POSITION": p, "NORMAL": nrm }, "indices": ix }]),
+        json!({}),
+    );
+    let len = doc.bin.len();
+    let buffers = json!([{ "byteLength": len }, { "byteLength": 16 * n,
+        "extensions": { "EXT_meshopt_compression": { "fallback": true } } }]);
+    let dir = TempDir::new().unwrap();
+    let read = gltf::read(&write_glb(&doc, buffers, dir.path())).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = &read.meshes[0].mesh;
+    for (k, q) in mesh.positions.iter().enumerate() {
+        let want = DVec3::from_array(positions[k].map(f64::from));
+        // 15-bit mantissas: relative error below 2^-14 per component.
+        let tol = want.abs().max_element() * 2f64.powi(-14) + 1e-12;
+        assert!(
+            (*q - want).abs().max_element() <= tol,
+            "vertex {k}: {q} != {want}"
+        );
+    }
+    for (k, got) in mesh.normals.as_ref().unwrap().iter().enumerate() {
+        let want = DVec3::new(
+            normals[k][0].into(),
+            normals[k][1].into(),
+            normals[k][2].into(),
+        );
+        let angle = got.dot(want).clamp(-1.0, 1.0).acos().to_degrees();
+        assert!(angle < 1.0, "normal {k}: {angle}° off");
+    }
+}
