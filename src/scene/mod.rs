@@ -156,6 +156,9 @@ impl Scene {
                 LightKind::Spot { .. } => f.spot_lights = true,
                 LightKind::Rect { .. } | LightKind::Sphere { .. } => f.area_lights = true,
             }
+            // Every area kind (LightKind::samples, an exhaustive match) needs
+            // the shadow stage's area sampling code.
+            f.area_lights |= l.kind.is_area();
         }
         let uses = self.texture_uses();
         f.textures = !uses.is_empty();

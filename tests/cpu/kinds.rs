@@ -100,9 +100,9 @@ fn every_light_kind_is_covered() {
         "light",
         &LightKind::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
             typed: &[
-                &["tools/fuzz/seeds.rs"],
+                &["tools/measure/fuzz/seeds.rs"],
                 &["tests/cli/bad_input.rs", "tests/cli/area_light_input.rs"],
             ],
         },
@@ -118,6 +118,17 @@ fn every_light_kind_is_covered() {
         "{used:?}"
     );
     missing.extend(reference_covers(&LightKind::TYPES, &used, "LightKind"));
+    // An end-to-end test of each kind's light against its formula.
+    let end_to_end = text("tests/gpu/lights.rs") + &text("tests/gpu/area_lights.rs");
+    for t in LightKind::TYPES {
+        let typed = format!("\"type\": \"{t}\"");
+        let built = format!("LightKind::{}", variant(t));
+        if !end_to_end.contains(&typed) && !end_to_end.contains(&built) {
+            missing.push(format!(
+                "light kind \"{t}\": not in tests/gpu/lights.rs or tests/gpu/area_lights.rs"
+            ));
+        }
+    }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
 
@@ -128,8 +139,11 @@ fn every_object_kind_is_covered() {
         "object",
         &Shape::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[&["tools/fuzz/seeds.rs"], &["tests/cli/bad_input.rs"]],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
+            typed: &[
+                &["tools/measure/fuzz/seeds.rs"],
+                &["tests/cli/bad_input.rs"],
+            ],
         },
         &mut missing,
     );
@@ -150,8 +164,11 @@ fn every_shader_kind_is_covered() {
         "shader",
         &Shader::TYPES,
         &Places {
-            quoted: &["tools/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[&["tools/fuzz/seeds.rs"], &["tests/cli/bad_input.rs"]],
+            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
+            typed: &[
+                &["tools/measure/fuzz/seeds.rs"],
+                &["tests/cli/bad_input.rs"],
+            ],
         },
         &mut missing,
     );

@@ -316,6 +316,48 @@ mod tests {
         (*span as usize, layouter[handle].size as usize, fields)
     }
 
+    /// Every `#[repr(C)]` struct of this module is in [`host_layouts`], so
+    /// that a new mirror of a WGSL struct cannot go unchecked.
+    #[test]
+    fn every_mirrored_struct_is_in_host_layouts() {
+        let sources = [
+            include_str!("mod.rs"),
+            include_str!("aov.rs"),
+            include_str!("bvh.rs"),
+            include_str!("camera.rs"),
+            include_str!("lights.rs"),
+            include_str!("primitives.rs"),
+            include_str!("queries.rs"),
+            include_str!("shading.rs"),
+            include_str!("textures.rs"),
+        ];
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/render/layout");
+        let files = std::fs::read_dir(dir).unwrap().count();
+        assert_eq!(
+            files,
+            sources.len(),
+            "a file of src/render/layout/ is not read here"
+        );
+        let listed: Vec<&str> = host_layouts().iter().map(|(name, ..)| *name).collect();
+        let mut mirrored = 0;
+        for source in sources {
+            // A top-level `#[repr(C)]` attribute line, then the struct's line.
+            let mut lines = source.lines();
+            while let Some(line) = lines.next() {
+                if line != "#[repr(C)]" {
+                    continue;
+                }
+                let name = lines
+                    .find_map(|l| l.strip_prefix("pub struct "))
+                    .and_then(|rest| rest.split(|c: char| !c.is_alphanumeric()).next())
+                    .unwrap_or_default();
+                assert!(listed.contains(&name), "{name:?} is not in host_layouts()");
+                mirrored += 1;
+            }
+        }
+        assert_eq!(mirrored, listed.len());
+    }
+
     #[test]
     fn host_structs_match_wgsl_layout() {
         let source = crate::render::compile::ShaderSource::Embedded

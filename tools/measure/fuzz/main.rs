@@ -160,8 +160,7 @@ fn replay(files: &[PathBuf]) -> ExitCode {
         let data = std::fs::read(f).unwrap_or_default();
         // A WGSL file replaces the shading file of its name (else phong.wgsl).
         let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let shading = ["blinn_phong.wgsl", "checker.wgsl", "shader.wgsl"];
-        let name = if shading.contains(&name) {
+        let name = if seeds::shading_files().contains(&name) {
             name
         } else {
             "phong.wgsl"

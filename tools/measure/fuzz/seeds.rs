@@ -78,12 +78,7 @@ pub fn all() -> Vec<Seed> {
     for name in ["bunny.glb", "bunny_scene.glb"] {
         seeds.extend(file(Target::Glb, &r.join("scenes").join(name)));
     }
-    for name in [
-        "phong.wgsl",
-        "blinn_phong.wgsl",
-        "checker.wgsl",
-        "shader.wgsl",
-    ] {
+    for name in shading_files() {
         seeds.extend(file(Target::Wgsl, &r.join("shaders/shading").join(name)));
     }
     seeds.extend(
@@ -260,6 +255,17 @@ pub fn glb(mut json: Vec<u8>, rest: &[u8]) -> Vec<u8> {
     out.extend(json);
     out.extend(rest);
     out
+}
+
+/// The engine's shading files (`shaders/shading/`, from the renderer's own
+/// table of shader files, so that a new one is fuzzed too), but the
+/// interface that user shaders are written against.
+pub fn shading_files() -> Vec<&'static str> {
+    penumbra::render::stages::SHADER_FILES
+        .iter()
+        .filter_map(|(name, _)| name.strip_prefix("shading/"))
+        .filter(|name| *name != "interface.wgsl")
+        .collect()
 }
 
 /// JSON scenes with every object, light and shader kind.
