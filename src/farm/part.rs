@@ -81,7 +81,8 @@ fn text(s: &str) -> AttributeValue {
 }
 
 /// Writes a part atomically: `image` holds the part's rows (`info.rows`) of
-/// pass sums, as [`crate::render::Renderer::render_part`] returns them.
+/// pass sums, as [`crate::render::Renderer::render`] returns them for a
+/// [`crate::render::RenderRequest::part`].
 pub fn write(path: &Path, info: &PartInfo, image: &Image) -> anyhow::Result<()> {
     let rows = info.rows.end - info.rows.start;
     anyhow::ensure!(

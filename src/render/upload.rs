@@ -204,7 +204,7 @@ impl Renderer {
     }
 
     /// [`Renderer::upload`] for the parts of a split render
-    /// ([`Renderer::render_part`]): the image may be larger than one render
+    /// ([`RenderRequest::part`](super::RenderRequest::part)): the image may be larger than one render
     /// holds ([`bands::MAX_IMAGE_BYTES`]), since each part renders only its
     /// rows.
     pub fn upload_for_parts(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
@@ -213,7 +213,7 @@ impl Renderer {
 
     /// Lays out a validated scene, builds its BVH and uploads it. The result
     /// can be rendered many times, at any size up to the scene's own, and
-    /// survives shader edits (see [`Renderer::render_uploaded`]).
+    /// survives shader edits (see [`Renderer::render`]).
     pub fn upload(&mut self, scene: &Scene) -> Result<UploadedScene, RenderError> {
         self.upload_inner(scene, true)
     }

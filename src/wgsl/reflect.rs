@@ -1,5 +1,5 @@
 //! Reflection of shader files written as WGSL: what a file declares, read
-//! once per text ([`super::cache`]).
+//! once per text ([`super::reflect()`], which caches).
 //!
 //! A shader file defines
 //!
@@ -12,7 +12,8 @@
 //! against the engine's types of `shaders/shading/interface.wgsl`. [`reflect`]
 //! parses the file after that interface (parse only: the renderer validates
 //! the pipeline it builds), checks the signatures, and lists the members of
-//! `Params`, whose values the scene supplies ([`WgslShader::values`]).
+//! `Params`, whose values the scene supplies
+//! ([`WgslShader::values`](crate::scene::shading::WgslShader::values)).
 
 use std::fmt;
 use std::ops::Range;

@@ -41,11 +41,14 @@
 //!   `compile::shade_override_values`) in README.md and docs/*.md, and every
 //!   backticked snake_case name (`load_scene`, `check_bindings()`) in the docs
 //!   that describe the code (README.md, docs/architecture.md, docs/design.md),
-//!   must consist of identifiers found in the sources (`src/`, `shaders/`,
-//!   `tools/`, `tests/`, as words or file names). A name with `foo` in it is
+//!   must consist of identifiers found in the code of the sources (`src/`,
+//!   `shaders/`, `tools/`, `tests/`, outside `//` comments, or their file
+//!   names). A name with `foo` in it is
 //!   a checklist's placeholder.
 //! - **No orphans.** Every docs/*.md is reachable from README.md through
 //!   relative links between the docs.
+//! - **The library example.** README.md's `rust` block is the body of
+//!   `library_example` here, which is compiled with the tests.
 //! - **Test modules.** docs/tests.md has one table row per test binary,
 //!   starting with the binary's file (`tests/gpu/main.rs`); its last cell
 //!   must name, backticked, every `mod x;` of that `main.rs`, and every
@@ -520,6 +523,13 @@ fn source_words() -> BTreeSet<String> {
                 .is_some_and(|e| e == "rs" || e == "wgsl" || e == "sh" || e == "py")
             {
                 let text = fs::read_to_string(&path).unwrap_or_default();
+                // Code, not comments: a name that only a comment still
+                // mentions is gone.
+                let text: String = text
+                    .lines()
+                    .map(|line| line.split("//").next().unwrap_or_default())
+                    .collect::<Vec<_>>()
+                    .join("\n");
                 for word in text.split(|c: char| !c.is_ascii_alphanumeric() && c != '_') {
                     if !word.is_empty() {
                         words.insert(word.to_string());
@@ -765,5 +775,53 @@ fn every_doc_is_reachable_from_the_readme() {
     assert!(
         orphans.is_empty(),
         "no link leads from README.md to {orphans:?}"
+    );
+}
+
+/// The README's library example ("As a library"), compiled here so that it
+/// follows the library's API; not run (it needs a device: the GPU tests
+/// render the same way).
+#[allow(dead_code)]
+#[rustfmt::skip]
+fn library_example() -> anyhow::Result<()> {
+    // README begin
+    use penumbra::{loaders, output, render::{Renderer, RendererOptions}};
+    let loaded = loaders::load_scene("scenes/showcase.json".as_ref(), &Default::default())?;
+    let mut renderer = Renderer::new(&RendererOptions::default())?; // once
+    let frame = renderer.render_scene(&loaded.scene)?;               // per scene
+    output::write_image("showcase.png".as_ref(), &frame.image)?;
+    // README end
+    Ok(())
+}
+
+/// The README's `rust` block is [`library_example`]'s body, line for line.
+#[test]
+fn the_readme_library_example_is_the_compiled_one() {
+    let source = read("tests/cpu/docs.rs");
+    let begin = "// README begin\n";
+    let start = source.find(begin).expect("the begin marker") + begin.len();
+    let end = start
+        + source[start..]
+            .find("// README end")
+            .expect("the end marker");
+    let compiled: Vec<&str> = source[start..end]
+        .trim_end()
+        .lines()
+        .map(str::trim)
+        .collect();
+    let readme = read("README.md");
+    let start = readme
+        .find("```rust\n")
+        .expect("README.md: a ```rust block")
+        + 8;
+    let end = start + readme[start..].find("```").expect("the block's end");
+    let shown: Vec<&str> = readme[start..end]
+        .trim_end()
+        .lines()
+        .map(str::trim)
+        .collect();
+    assert_eq!(
+        shown, compiled,
+        "README.md's library example is not the one compiled here"
     );
 }
