@@ -55,6 +55,7 @@
 //! | `ModifiedPhong` (Lafortune and Willems 1994) | `ρ_d/π + ρ_s·(n+2)/(2π)·cos^n α` |
 //! | `NormalisedBlinnPhong` (Akenine-Möller et al., *Real-Time Rendering* 3rd ed., 2008) | `ρ_d/π + ρ_s·(n+8)/(8π)·(n·h)^n` |
 //! | `GiesenBlinnPhong` (F. Giesen, "Derivation of Phong and Blinn-Phong BRDF normalization factors", 2009) | `ρ_d/π + ρ_s·(n+2)(n+4)/(8π(2^(−n/2)+n))·(n·h)^n` |
+//! | `GltfMetal`, `GltfDielectric` (glTF 2.0, Appendix B) | `mix(dielectric, metal, metallic)` of `crate::scene::shading::metallic_roughness`, base colour `c` = [`Brdf::diffuse`], roughness = [`Brdf::shininess`] |
 //!
 //! with `cos α = max(0, r(ω_i)·ω_o)`, `r(ω) = 2(n·ω)n − ω` (symmetric:
 //! `r(ω_i)·ω_o = r(ω_o)·ω_i`), `h = (ω_i+ω_o)/|ω_i+ω_o|`, and `u = 1` or `1/π`
@@ -191,11 +192,17 @@ pub enum Model {
     /// Blinn-Phong with Giesen's exact normal-incidence normalisation:
     /// `ρ_d/π + ρ_s·(n+2)(n+4)/(8π(2^(−n/2)+n))·(n·h)^n`.
     GiesenBlinnPhong,
+    /// glTF 2.0's metallic-roughness BRDF with metallic 1
+    /// (`crate::scene::shading::metallic_roughness`): base colour `c` =
+    /// [`Brdf::diffuse`], roughness = [`Brdf::shininess`].
+    GltfMetal,
+    /// The same with metallic 0 (a dielectric).
+    GltfDielectric,
 }
 
 impl Model {
     /// Every model, in the order of the lab's table.
-    pub const ALL: [Model; 10] = [
+    pub const ALL: [Model; 12] = [
         Model::Lambert,
         Model::Phong,
         Model::SeminarPhong(Units::Renderer),
@@ -206,6 +213,8 @@ impl Model {
         Model::ModifiedPhong,
         Model::NormalisedBlinnPhong,
         Model::GiesenBlinnPhong,
+        Model::GltfMetal,
+        Model::GltfDielectric,
     ];
 
     /// A short name for tables.
@@ -221,7 +230,15 @@ impl Model {
             Model::ModifiedPhong => "modified Phong (n+2)/(2π)",
             Model::NormalisedBlinnPhong => "normalised Blinn-Phong (n+8)/(8π)",
             Model::GiesenBlinnPhong => "Blinn-Phong, Giesen's exact factor",
+            Model::GltfMetal => "glTF metal (metallic 1), c = 1",
+            Model::GltfDielectric => "glTF dielectric (metallic 0), c = 1",
         }
+    }
+
+    /// Whether the model is glTF's, whose [`Brdf::shininess`] is the
+    /// roughness (in the lab: [`ROUGHNESS`]).
+    pub fn is_gltf(self) -> bool {
+        matches!(self, Model::GltfMetal | Model::GltfDielectric)
     }
 
     /// Whether the model has a specular lobe (and so a shininess).
@@ -239,7 +256,8 @@ pub struct Brdf {
     pub diffuse: f64,
     /// Specular weight: `k_s` or `ρ_s`.
     pub specular: f64,
-    /// The lobe exponent `n` (ignored by Lambert).
+    /// The lobe exponent `n` (ignored by Lambert); for glTF's models the
+    /// roughness.
     pub shininess: f64,
 }
 
@@ -263,6 +281,14 @@ impl Brdf {
     pub fn lobe(model: Model, shininess: f64) -> Brdf {
         match model {
             Model::Lambert => Brdf::lambert(1.0),
+            // Base colour 1: the most a metal's Fresnel and a dielectric's
+            // diffuse part reflect.
+            Model::GltfMetal | Model::GltfDielectric => Brdf {
+                model,
+                diffuse: 1.0,
+                specular: 0.0,
+                shininess,
+            },
             _ => Brdf {
                 model,
                 diffuse: 0.0,
@@ -296,7 +322,37 @@ impl Brdf {
             Model::GiesenBlinnPhong => {
                 kd / PI + ks * giesen_factor(n) * lobe_pow(cos_half(wi, wo), n)
             }
+            Model::GltfMetal | Model::GltfDielectric => {
+                let metallic = if self.model == Model::GltfMetal {
+                    1.0
+                } else {
+                    0.0
+                };
+                let (d, s) = crate::scene::shading::metallic_roughness::brdf(
+                    glam::DVec3::Z,
+                    glam::DVec3::from(wi),
+                    glam::DVec3::from(wo),
+                    glam::DVec3::splat(kd),
+                    metallic,
+                    n,
+                );
+                d.x + s.x
+            }
         }
+    }
+
+    /// The quadrature rule for this BRDF: [`Quadrature::for_shininess`] of
+    /// its exponent, or for glTF's models of the Phong exponent whose lobe
+    /// is about as wide as the microfacet lobe of width `α = roughness²`,
+    /// `n = 2/α² − 2` (the Beckmann–Phong correspondence of Walter et al.,
+    /// "Microfacet Models for Refraction", EGSR 2007, section 5.2; the
+    /// error estimate checks that the rule suffices).
+    pub fn quadrature(&self) -> Quadrature {
+        if self.model.is_gltf() {
+            let alpha = self.shininess * self.shininess;
+            return Quadrature::for_shininess(2.0 / (alpha * alpha).max(1e-12) - 2.0);
+        }
+        Quadrature::for_shininess(self.shininess)
     }
 }
 
@@ -421,14 +477,14 @@ pub fn reflectance_with(brdf: &Brdf, wi: Vec3, q: &Quadrature) -> f64 {
 /// The directional albedo `a(ω_o)` at polar angle `theta_o` (radians), with
 /// the rule for the BRDF's shininess and its error estimate.
 pub fn albedo(brdf: &Brdf, theta_o: f64) -> Estimate {
-    let q = Quadrature::for_shininess(brdf.shininess);
+    let q = brdf.quadrature();
     estimate(&q, |q| albedo_with(brdf, dir(theta_o, 0.0), q))
 }
 
 /// The directional reflectance `R(ω_i)` at polar angle `theta_i` (radians),
 /// with the rule for the BRDF's shininess and its error estimate.
 pub fn reflectance(brdf: &Brdf, theta_i: f64) -> Estimate {
-    let q = Quadrature::for_shininess(brdf.shininess);
+    let q = brdf.quadrature();
     estimate(&q, |q| reflectance_with(brdf, dir(theta_i, 0.0), q))
 }
 
@@ -575,7 +631,7 @@ impl Energy {
 /// Evaluates `a` and `R` at every angle of `angles_deg` (in parallel) and
 /// keeps the largest of each.
 pub fn energy(brdf: &Brdf, angles_deg: &[f64]) -> Energy {
-    let fine = Quadrature::for_shininess(brdf.shininess);
+    let fine = brdf.quadrature();
     let coarse = fine.coarser();
     let results: Vec<(f64, Estimate, Estimate)> = angles_deg
         .par_iter()
@@ -661,6 +717,9 @@ pub fn check(brdf: &Brdf) -> Properties {
         energy: energy(brdf, &ENERGY_ANGLES_DEG),
     }
 }
+
+/// The roughness values of the lab for glTF's models (`α` from 0.04 to 1).
+pub const ROUGHNESS: [f64; 5] = [0.2, 0.3, 0.5, 0.7, 1.0];
 
 /// The shininess values of the lab.
 pub const SHININESS: [f64; 8] = [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0];

@@ -39,6 +39,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod terminal;
+pub mod tonemap;
 pub mod vector_width;
 pub mod vulkan;
 pub mod watch;

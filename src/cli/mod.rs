@@ -90,6 +90,12 @@ struct LimitArgs {
     #[arg(long, value_name = "MIB", default_value_t = loaders::guard::DEFAULT_MAX_SCENE_BYTES >> 20,
           value_parser = clap::value_parser!(u64).range(1..=1 << 30))]
     max_scene_memory: u64,
+    /// The shader of glTF materials: glTF's own `metallic-roughness` model, or
+    /// `phong`, the seminar's diffuse mapping of the base colour (renders made
+    /// before issue 38; docs/materials.md).
+    #[arg(long, value_name = "MODEL", default_value = "metallic-roughness",
+          value_parser = |s: &str| s.parse::<loaders::GltfMaterials>())]
+    gltf_materials: loaders::GltfMaterials,
 }
 
 impl LimitArgs {
@@ -100,6 +106,7 @@ impl LimitArgs {
             height,
             restrict_paths: self.restrict_paths,
             max_scene_bytes: self.max_scene_memory << 20,
+            gltf_materials: self.gltf_materials,
             ..Default::default()
         }
     }

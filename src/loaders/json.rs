@@ -13,9 +13,10 @@ use serde::Deserialize;
 use super::{LoadOptions, Loaded};
 use crate::scene::MAX_LIGHT_SAMPLES;
 use crate::scene::{
-    Camera, Checker, Filter, Light, LightKind, Object, ParamField, ParamType, ParamValue, Phong,
-    PhongTextures, Plane, Projection, Sampler, Scene, Shader, ShaderId, Shape, Sphere, Texture,
-    TextureId, TextureRef, Triangle, UvTransform, WgslShader, Wrap,
+    Camera, Checker, Filter, Light, LightKind, MetallicRoughness, MetallicRoughnessTextures,
+    Object, ParamField, ParamType, ParamValue, Phong, PhongTextures, Plane, Projection, Sampler,
+    Scene, Shader, ShaderId, Shape, Sphere, Texture, TextureId, TextureRef, Triangle, UvTransform,
+    WgslShader, Wrap,
 };
 use crate::SceneError;
 
@@ -69,6 +70,8 @@ enum ProjectionKind {
 enum ShaderKind {
     Phong,
     BlinnPhong,
+    MetallicRoughness,
+    SpecularGlossiness,
     Checker,
     Wgsl,
 }
@@ -85,6 +88,15 @@ struct ShaderFile {
     /// As `ambient`.
     specular: Option<serde_json::Value>,
     shininess: Option<f32>,
+    /// `[r, g, b]` or a texture object (metallic_roughness).
+    base_colour: Option<serde_json::Value>,
+    metallic: Option<f32>,
+    roughness: Option<f32>,
+    /// A texture object: B scales metallic, G roughness.
+    metallic_roughness: Option<serde_json::Value>,
+    glossiness: Option<f32>,
+    /// A texture object: RGB scales specular, A glossiness.
+    specular_glossiness: Option<serde_json::Value>,
     size: Option<f64>,
     even: Option<String>,
     odd: Option<String>,
@@ -218,7 +230,7 @@ const TEXTURE_KEYS: [&str; 5] = ["texture", "scale", "filter", "wrap", "encoding
 
 /// What a texture object may stand for, for the message when one is found
 /// elsewhere.
-const TEXTURE_PLACES: &str = "a texture (`{\"texture\": ...}`) can only be the `ambient`, `diffuse` or `specular` colour of a phong or blinn_phong shader, or the value of a u32 Params field of a wgsl shader";
+const TEXTURE_PLACES: &str = "a texture (`{\"texture\": ...}`) can only be the `ambient`, `diffuse` or `specular` colour of a phong or blinn_phong shader, the `base_colour` or `metallic_roughness` of a metallic_roughness shader, the `diffuse` or `specular_glossiness` of a specular_glossiness shader, or the value of a u32 Params field of a wgsl shader";
 
 /// A JSON value described for messages.
 fn describe(v: &serde_json::Value) -> String {
@@ -238,6 +250,8 @@ type WgslFiles = BTreeMap<PathBuf, (String, crate::wgsl::Reflection)>;
 
 struct Reader<'a> {
     file: &'a Path,
+    /// The shader of a `mesh` object without one (its glTF materials).
+    gltf_materials: super::GltfMaterials,
 }
 
 impl Reader<'_> {
@@ -825,9 +839,13 @@ impl Reader<'_> {
         let phong = matches!(s.kind, ShaderKind::Phong | ShaderKind::BlinnPhong);
         let checker = s.kind == ShaderKind::Checker;
         let wgsl = s.kind == ShaderKind::Wgsl;
+        let pbr = s.kind == ShaderKind::MetallicRoughness;
+        let sg = s.kind == ShaderKind::SpecularGlossiness;
         let kind = match s.kind {
             ShaderKind::Phong => "a phong shader",
             ShaderKind::BlinnPhong => "a blinn_phong shader",
+            ShaderKind::MetallicRoughness => "a metallic_roughness shader",
+            ShaderKind::SpecularGlossiness => "a specular_glossiness shader",
             ShaderKind::Checker => "a checker shader",
             ShaderKind::Wgsl => "a wgsl shader",
         };
@@ -836,7 +854,8 @@ impl Reader<'_> {
             &at,
             kind,
             &[
-                ("diffuse", s.diffuse.is_some(), phong),
+                // Required by Phong, optional for specular_glossiness.
+                ("diffuse", s.diffuse.is_some() && !sg, phong),
                 ("size", s.size.is_some(), checker),
                 ("even", s.even.is_some(), checker),
                 ("odd", s.odd.is_some(), checker),
@@ -848,9 +867,33 @@ impl Reader<'_> {
             ("specular", s.specular.is_some()),
             ("shininess", s.shininess.is_some()),
         ] {
-            if present && !phong {
+            if present && !phong && !(sg && k == "specular") {
                 return Err(self.err(f(k), format!("not a field of {kind}")));
             }
+        }
+        for (k, present) in [
+            ("base_colour", s.base_colour.is_some()),
+            ("metallic", s.metallic.is_some()),
+            ("roughness", s.roughness.is_some()),
+            ("metallic_roughness", s.metallic_roughness.is_some()),
+        ] {
+            if present && !pbr {
+                return Err(self.err(f(k), format!("not a field of {kind}")));
+            }
+        }
+        for (k, present) in [
+            ("glossiness", s.glossiness.is_some()),
+            ("specular_glossiness", s.specular_glossiness.is_some()),
+        ] {
+            if present && !sg {
+                return Err(self.err(f(k), format!("not a field of {kind}")));
+            }
+        }
+        if pbr {
+            return self.metallic_roughness(&at, s, base, guard, textures);
+        }
+        if sg {
+            return self.specular_glossiness(&at, s, base, guard, textures);
         }
         if s.params.is_some() && !wgsl {
             return Err(self.err(f("params"), format!("not a field of {kind}")));
@@ -907,6 +950,116 @@ impl Reader<'_> {
                 odd: sub("odd", &s.odd)?,
             })
         })
+    }
+
+    /// A `specular_glossiness` shader at `at`: the extension's defaults
+    /// (diffuse and specular white, glossiness 1) for absent fields.
+    fn specular_glossiness(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<Shader, SceneError> {
+        let f = |k: &str| format!("{at}.{k}");
+        let glossiness = match s.glossiness.unwrap_or(1.0) {
+            x if (0.0..=1.0).contains(&x) => x,
+            x => return Err(self.err(f("glossiness"), format!("must be in [0, 1], got {x}"))),
+        };
+        let (diffuse, diffuse_t) = self.colour_or_texture(
+            &f("diffuse"),
+            s.diffuse.as_ref(),
+            [1.0; 3],
+            base,
+            guard,
+            textures,
+        )?;
+        let specular = match &s.specular {
+            None | Some(serde_json::Value::Null) => self.colour(&f("specular"), [1.0; 3])?,
+            Some(v) => {
+                let c: C3 = serde_json::from_value(v.clone())
+                    .map_err(|e| self.err(f("specular"), e.to_string()))?;
+                self.colour(&f("specular"), c)?
+            }
+        };
+        let specular_glossiness = match &s.specular_glossiness {
+            None | Some(serde_json::Value::Null) => None,
+            Some(serde_json::Value::Object(m)) => {
+                Some(self.texture_use(&f("specular_glossiness"), m, base, guard, textures)?)
+            }
+            Some(other) => {
+                return Err(self.err(
+                    f("specular_glossiness"),
+                    format!(
+                        "must be a texture {{\"texture\": \"file.png\"}}, got {}",
+                        describe(other)
+                    ),
+                ))
+            }
+        };
+        Ok(Shader::SpecularGlossiness(
+            crate::scene::SpecularGlossiness {
+                diffuse,
+                specular,
+                glossiness,
+                textures: crate::scene::SpecularGlossinessTextures {
+                    diffuse: diffuse_t,
+                    specular_glossiness,
+                },
+            },
+        ))
+    }
+
+    /// A `metallic_roughness` shader at `at`: glTF's defaults (base colour
+    /// white, metallic 1, roughness 1) for absent fields.
+    fn metallic_roughness(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<Shader, SceneError> {
+        let f = |k: &str| format!("{at}.{k}");
+        let factor = |k: &str, v: Option<f32>| match v.unwrap_or(1.0) {
+            x if (0.0..=1.0).contains(&x) => Ok(x),
+            x => Err(self.err(f(k), format!("must be in [0, 1], got {x}"))),
+        };
+        let metallic = factor("metallic", s.metallic)?;
+        let roughness = factor("roughness", s.roughness)?;
+        let (base_colour, base_t) = self.colour_or_texture(
+            &f("base_colour"),
+            s.base_colour.as_ref(),
+            [1.0; 3],
+            base,
+            guard,
+            textures,
+        )?;
+        let metallic_roughness = match &s.metallic_roughness {
+            None | Some(serde_json::Value::Null) => None,
+            Some(serde_json::Value::Object(m)) => {
+                Some(self.texture_use(&f("metallic_roughness"), m, base, guard, textures)?)
+            }
+            Some(other) => {
+                return Err(self.err(
+                    f("metallic_roughness"),
+                    format!(
+                        "must be a texture {{\"texture\": \"file.png\", \"encoding\": \"linear\"}}, got {}",
+                        describe(other)
+                    ),
+                ))
+            }
+        };
+        Ok(Shader::MetallicRoughness(MetallicRoughness {
+            base_colour,
+            metallic,
+            roughness,
+            textures: MetallicRoughnessTextures {
+                base_colour: base_t,
+                metallic_roughness,
+            },
+        }))
     }
 
     /// No cycle among the checker shaders.
@@ -1162,7 +1315,7 @@ impl Reader<'_> {
     }
 
     /// A `mesh` object at `at` with the shader `shader` (None: each glTF
-    /// mesh gets a Phong shader of its base colour): reads the glTF file
+    /// mesh gets a shader of its material, as `--gltf-materials` says): reads the glTF file
     /// relative to `base`, applies the transform and adds the meshes, the
     /// notes and the files read to `loaded`.
     fn mesh(
@@ -1192,7 +1345,10 @@ impl Reader<'_> {
             .transpose()?
             .unwrap_or(DMat4::IDENTITY);
         let doc = super::gltf::read_with(&mesh_path, guard)?;
-        loaded.notes.extend(doc.notes);
+        let pbr =
+            shader.is_none() && self.gltf_materials == super::GltfMaterials::MetallicRoughness;
+        let applied = |n: &String| !(pbr && n.ends_with(super::gltf::METALLIC_ROUGHNESS_NOTE));
+        loaded.notes.extend(doc.notes.into_iter().filter(applied));
         loaded.files.extend(doc.files);
         // The file's textures follow the scene's: its materials' texture
         // ids move by this much.
@@ -1212,17 +1368,37 @@ impl Reader<'_> {
                 // The scene's shader replaces the material, maps included.
                 Some(s) => (s, Default::default()),
                 None => {
-                    let mut phong = gm.phong;
-                    moved(&mut phong.textures.ambient);
-                    moved(&mut phong.textures.diffuse);
-                    moved(&mut phong.textures.specular);
+                    let material = match self.gltf_materials {
+                        _ if gm.unlit => Shader::Phong(super::gltf::UNLIT),
+                        super::GltfMaterials::MetallicRoughness
+                            if gm.specular_glossiness.is_some() =>
+                        {
+                            let mut sg = gm.specular_glossiness.expect("matched");
+                            moved(&mut sg.textures.diffuse);
+                            moved(&mut sg.textures.specular_glossiness);
+                            Shader::SpecularGlossiness(sg)
+                        }
+                        super::GltfMaterials::MetallicRoughness => {
+                            let mut pbr = gm.pbr;
+                            moved(&mut pbr.textures.base_colour);
+                            moved(&mut pbr.textures.metallic_roughness);
+                            Shader::MetallicRoughness(pbr)
+                        }
+                        super::GltfMaterials::Phong => {
+                            let mut phong = gm.phong;
+                            moved(&mut phong.textures.ambient);
+                            moved(&mut phong.textures.diffuse);
+                            moved(&mut phong.textures.specular);
+                            Shader::Phong(phong)
+                        }
+                    };
                     let mut maps = gm.maps;
                     if let Some((t, _)) = &mut maps.normal {
                         t.texture += offset;
                     }
                     moved(&mut maps.emission_texture);
                     moved(&mut maps.opacity_texture);
-                    loaded.scene.shaders.push(Shader::Phong(phong));
+                    loaded.scene.shaders.push(material);
                     (loaded.scene.shaders.len() - 1, maps)
                 }
             };
@@ -1342,7 +1518,10 @@ pub fn read_texture(
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
     let guard = super::guard::Guard::new(path, opts);
     let file = parse(path, &guard)?;
-    let r = Reader { file: path };
+    let r = Reader {
+        file: path,
+        gltf_materials: opts.gltf_materials,
+    };
     let camera = r.camera(&file.camera, opts)?;
     let background = r.colour("background", file.background)?;
     let base = path.parent().unwrap_or(Path::new("."));

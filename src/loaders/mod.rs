@@ -31,8 +31,34 @@ pub struct LoadOptions {
     /// mip chains (the renderer's texture image), checked from each image's
     /// header before it is decoded; `u64::MAX` when no device is known.
     pub max_texture_bytes: u64,
+    /// Which shader glTF materials become (`--gltf-materials`).
+    pub gltf_materials: GltfMaterials,
     /// Which of a glTF file's cameras to render from (`--camera`).
     pub camera: gltf::CameraChoice,
+}
+
+/// The shader of a glTF file's materials (`--gltf-materials`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GltfMaterials {
+    /// glTF's own model (`metallic_roughness`): the default.
+    #[default]
+    MetallicRoughness,
+    /// The seminar's mapping: diffuse Phong of the base colour
+    /// (`phong`), as penumbra rendered glTF files before issue 38.
+    Phong,
+}
+
+impl std::str::FromStr for GltfMaterials {
+    type Err = String;
+
+    /// `metallic-roughness` or `phong` (`--gltf-materials`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "metallic-roughness" => Ok(GltfMaterials::MetallicRoughness),
+            "phong" => Ok(GltfMaterials::Phong),
+            _ => Err("expected `metallic-roughness` or `phong`".into()),
+        }
+    }
 }
 
 impl Default for LoadOptions {
@@ -45,6 +71,7 @@ impl Default for LoadOptions {
             max_triangles: guard::DEFAULT_MAX_TRIANGLES,
             max_texture_bytes: u64::MAX,
             camera: gltf::CameraChoice::File,
+            gltf_materials: GltfMaterials::default(),
         }
     }
 }

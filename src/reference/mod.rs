@@ -268,11 +268,14 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
             Shader::Checker(c) => todo.extend([c.even, c.odd]),
             Shader::Wgsl(w) => {
                 return Err(format!(
-                    "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker); shader `shaders[{id}]` is a WGSL file ({})",
+                    "the f64 reference renders only the built-in shaders (phong, blinn_phong, metallic_roughness, checker); shader `shaders[{id}]` is a WGSL file ({})",
                     w.path.display()
                 ))
             }
-            Shader::Phong(_) | Shader::BlinnPhong(_) => {}
+            Shader::Phong(_)
+            | Shader::BlinnPhong(_)
+            | Shader::MetallicRoughness(_)
+            | Shader::SpecularGlossiness(_) => {}
         }
     }
     Ok(())

@@ -1,6 +1,6 @@
-//! Shading as `shaders/shading/`: nested checkers resolved to a Phong or
-//! Blinn-Phong node, and the seminar's sum over lights and light samples
-//! (`shade`).
+//! Shading as `shaders/shading/`: nested checkers resolved to a Phong,
+//! Blinn-Phong or metallic-roughness node, and the seminar's sum over
+//! lights and light samples (`shade`).
 
 use glam::DVec3;
 
@@ -11,7 +11,8 @@ use super::sampling::sample_2d;
 use super::shadows::occluded;
 use super::surface::AlphaRay;
 use super::World;
-use crate::scene::{PhongTextures, Shader};
+use crate::scene::shading::{metallic_roughness, specular_glossiness};
+use crate::scene::{MetallicRoughness, PhongTextures, Shader, SpecularGlossiness};
 
 /// The lookup point of a checker moves this many cells into the surface
 /// (away from the viewer), so a surface on a cell boundary picks one cell
@@ -27,9 +28,14 @@ fn checker_is_even(size: f64, p: DVec3, n: DVec3) -> bool {
     (cell.x + cell.y + cell.z).rem_euclid(2.0) == 0.0
 }
 
-/// A Phong or Blinn-Phong node, in `f64`.
+/// A Phong or Blinn-Phong node, in `f64`, or a metallic-roughness one
+/// (`pbr`; the Phong fields are then zero).
 #[derive(Clone, Copy, Debug)]
 pub struct Lobe {
+    /// glTF's metallic-roughness BRDF instead of the Phong terms.
+    pub pbr: Option<MetallicRoughness>,
+    /// KHR_materials_pbrSpecularGlossiness instead of the Phong terms.
+    pub sg: Option<SpecularGlossiness>,
     /// Blinn-Phong (half vector) rather than Phong (mirror direction).
     pub blinn: bool,
     /// k_a.
@@ -58,7 +64,17 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
         node = &shaders[next];
     }
     match node {
+        Shader::MetallicRoughness(m) => Lobe {
+            pbr: Some(*m),
+            ..NONE
+        },
+        Shader::SpecularGlossiness(m) => Lobe {
+            sg: Some(*m),
+            ..NONE
+        },
         Shader::Phong(m) | Shader::BlinnPhong(m) => Lobe {
+            pbr: None,
+            sg: None,
             blinn: matches!(node, Shader::BlinnPhong(_)),
             ambient: m.ambient.as_dvec3(),
             diffuse: m.diffuse.as_dvec3(),
@@ -69,16 +85,25 @@ pub fn resolve_shader(shaders: &[Shader], id: u32, p: DVec3, n: DVec3) -> Lobe {
         // Only a cyclic table (which validation rules out) ends here; the
         // GPU would read the checker node's zero colours. A WGSL shader never
         // gets here: `reference::render` refuses such a scene first.
-        Shader::Checker(_) | Shader::Wgsl(_) => Lobe {
-            blinn: false,
-            ambient: DVec3::ZERO,
-            diffuse: DVec3::ZERO,
-            specular: DVec3::ZERO,
-            shininess: 0.0,
-            textures: PhongTextures::default(),
-        },
+        Shader::Checker(_) | Shader::Wgsl(_) => NONE,
     }
 }
+
+/// A node that adds nothing.
+const NONE: Lobe = Lobe {
+    pbr: None,
+    sg: None,
+    blinn: false,
+    ambient: DVec3::ZERO,
+    diffuse: DVec3::ZERO,
+    specular: DVec3::ZERO,
+    shininess: 0.0,
+    textures: PhongTextures {
+        ambient: None,
+        diffuse: None,
+        specular: None,
+    },
+};
 
 /// `x^n` with `0^0 = 1` (`spec_pow`).
 pub fn spec_pow(x: f64, n: f64) -> f64 {
@@ -130,6 +155,22 @@ pub fn shade(
         hit.geometric_normal,
     );
     let mut colour = DVec3::ZERO;
+    // (base colour, metallic, roughness) after the textures, in f64.
+    let mut pbr_f64 = node.pbr.map(|m| {
+        (
+            m.base_colour.as_dvec3(),
+            m.metallic as f64,
+            m.roughness as f64,
+        )
+    });
+    // (diffuse, specular, glossiness) after the textures, in f64.
+    let mut sg_f64 = node.sg.map(|m| {
+        (
+            m.diffuse.as_dvec3(),
+            m.specular.as_dvec3(),
+            m.glossiness as f64,
+        )
+    });
     if let Some(s) = &hit.surface {
         let tex = |t: &Option<crate::scene::TextureRef>| {
             t.map_or(DVec3::ONE, |t| s.sample(world, &t).truncate())
@@ -137,6 +178,22 @@ pub fn shade(
         node.ambient *= tex(&node.textures.ambient);
         node.diffuse *= tex(&node.textures.diffuse) * s.colour.truncate();
         node.specular *= tex(&node.textures.specular);
+        // The metallic-roughness shader's `prepare`.
+        if let Some(m) = &node.pbr {
+            let c = m.base_colour.as_dvec3() * tex(&m.textures.base_colour) * s.colour.truncate();
+            let mr = tex(&m.textures.metallic_roughness);
+            pbr_f64 = Some((c, m.metallic as f64 * mr.z, m.roughness as f64 * mr.y));
+        }
+        // The specular-glossiness shader's `prepare`.
+        if let Some(m) = &node.sg {
+            let d = m.diffuse.as_dvec3() * tex(&m.textures.diffuse) * s.colour.truncate();
+            let sg = m
+                .textures
+                .specular_glossiness
+                .map_or(glam::DVec4::ONE, |t| s.sample(world, &t));
+            let spec = m.specular.as_dvec3() * sg.truncate();
+            sg_f64 = Some((d, spec, m.glossiness as f64 * sg.w));
+        }
         let object = super::surface::object_of(world, hit.kind, hit.index) as usize;
         let maps = &world.objects[object].maps;
         colour += maps.emission.as_dvec3() * tex(&maps.emission_texture);
@@ -164,6 +221,17 @@ pub fn shade(
             }
             *shadow_rays += 1;
             if occluded(world, hit, &ls, shadow_ray) {
+                continue;
+            }
+            if let Some((c, metallic, roughness)) = pbr_f64 {
+                let (d, sp) = metallic_roughness::brdf(n, ls.to_light, v, c, metallic, roughness);
+                colour += ls.falloff * ln * (d * light.diffuse + sp * light.specular);
+                continue;
+            }
+            if let Some((diffuse, specular, glossiness)) = sg_f64 {
+                let (d, sp) =
+                    specular_glossiness::brdf(n, ls.to_light, v, diffuse, specular, glossiness);
+                colour += ls.falloff * ln * (d * light.diffuse + sp * light.specular);
                 continue;
             }
             let lobe = if node.blinn {

@@ -255,6 +255,84 @@ pub fn phong_words(
     Ok(words)
 }
 
+/// The parameter words of the built-in metallic-roughness shader, in the
+/// order of the file's `Params` fields (matched by name).
+pub fn metallic_roughness_words(
+    fields: &[ParamField],
+    m: &crate::scene::MetallicRoughness,
+    uses: &[crate::scene::TextureRef],
+    label: &str,
+) -> Result<Vec<u32>, CompileError> {
+    let mut words = Vec::new();
+    for ParamField { name, ty: kind } in fields {
+        let texture = |t: &Option<crate::scene::TextureRef>| {
+            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
+                crate::scene::Scene::texture_use_index(uses, t)
+            });
+            vec![f32::from_bits(index)]
+        };
+        let value: Vec<f32> = match (name.as_str(), kind) {
+            ("base_colour", ParamType::Vec3) => m.base_colour.to_array().to_vec(),
+            ("metallic", ParamType::F32) => vec![m.metallic],
+            ("roughness", ParamType::F32) => vec![m.roughness],
+            ("base_colour_texture", ParamType::U32) => texture(&m.textures.base_colour),
+            ("metallic_roughness_texture", ParamType::U32) => {
+                texture(&m.textures.metallic_roughness)
+            }
+            _ => {
+                return Err(CompileError {
+                    location: label.to_string(),
+                    message: format!(
+                        "Params field `{name}: {}` is not one of the metallic-roughness shader's fields (base_colour: vec3<f32>; metallic, roughness: f32; base_colour_texture, metallic_roughness_texture: u32)",
+                        kind.wgsl()
+                    ),
+                })
+            }
+        };
+        words.extend(value.iter().map(|v| v.to_bits()));
+    }
+    Ok(words)
+}
+
+/// The parameter words of the built-in specular-glossiness shader, in the
+/// order of the file's `Params` fields (matched by name).
+pub fn specular_glossiness_words(
+    fields: &[ParamField],
+    m: &crate::scene::SpecularGlossiness,
+    uses: &[crate::scene::TextureRef],
+    label: &str,
+) -> Result<Vec<u32>, CompileError> {
+    let mut words = Vec::new();
+    for ParamField { name, ty: kind } in fields {
+        let texture = |t: &Option<crate::scene::TextureRef>| {
+            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
+                crate::scene::Scene::texture_use_index(uses, t)
+            });
+            vec![f32::from_bits(index)]
+        };
+        let value: Vec<f32> = match (name.as_str(), kind) {
+            ("diffuse", ParamType::Vec3) => m.diffuse.to_array().to_vec(),
+            ("specular", ParamType::Vec3) => m.specular.to_array().to_vec(),
+            ("glossiness", ParamType::F32) => vec![m.glossiness],
+            ("diffuse_texture", ParamType::U32) => texture(&m.textures.diffuse),
+            ("specular_glossiness_texture", ParamType::U32) => {
+                texture(&m.textures.specular_glossiness)
+            }
+            _ => {
+                return Err(CompileError {
+                    location: label.to_string(),
+                    message: format!(
+                        "Params field `{name}: {}` is not one of the specular-glossiness shader's fields (diffuse, specular: vec3<f32>; glossiness: f32; diffuse_texture, specular_glossiness_texture: u32)",
+                        kind.wgsl()
+                    ),
+                })
+            }
+        };
+        words.extend(value.iter().map(|v| v.to_bits()));
+    }
+    Ok(words)
+}
+
 /// One shade program: a shader file, its text, and its `Params` fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Program {
@@ -298,6 +376,12 @@ impl Materials {
             let file = match sh {
                 Shader::Phong(_) => ProgramFile::Builtin("shading/phong.wgsl"),
                 Shader::BlinnPhong(_) => ProgramFile::Builtin("shading/blinn_phong.wgsl"),
+                Shader::MetallicRoughness(_) => {
+                    ProgramFile::Builtin("shading/metallic_roughness.wgsl")
+                }
+                Shader::SpecularGlossiness(_) => {
+                    ProgramFile::Builtin("shading/specular_glossiness.wgsl")
+                }
                 Shader::Wgsl(w) => ProgramFile::User(w.path.clone()),
                 Shader::Checker(_) => {
                     m.leaves.push(None);
@@ -333,6 +417,12 @@ impl Materials {
             let words = match sh {
                 Shader::Phong(p) | Shader::BlinnPhong(p) => {
                     phong_words(&m.programs[program].fields, p, uses, &label)?
+                }
+                Shader::MetallicRoughness(mr) => {
+                    metallic_roughness_words(&m.programs[program].fields, mr, uses, &label)?
+                }
+                Shader::SpecularGlossiness(sg) => {
+                    specular_glossiness_words(&m.programs[program].fields, sg, uses, &label)?
                 }
                 Shader::Wgsl(w) => {
                     // The scene's values were checked against the Params the

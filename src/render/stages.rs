@@ -54,6 +54,8 @@ shader_files![
     "shading/interface.wgsl",
     "shading/phong.wgsl",
     "shading/blinn_phong.wgsl",
+    "shading/metallic_roughness.wgsl",
+    "shading/specular_glossiness.wgsl",
     "textures.wgsl",
     "attributes.wgsl",
     "surface_maps.wgsl",

@@ -16,7 +16,9 @@ pub use camera::{Camera, Projection};
 pub use light::{Light, LightKind, MAX_LIGHT_SAMPLES};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
 pub use shading::{
-    Checker, ParamField, ParamType, ParamValue, Phong, PhongTextures, Shader, ShaderId, WgslShader,
+    Checker, MetallicRoughness, MetallicRoughnessTextures, ParamField, ParamType, ParamValue,
+    Phong, PhongTextures, Shader, ShaderId, SpecularGlossiness, SpecularGlossinessTextures,
+    WgslShader,
 };
 pub use texture::{
     AlphaMode, Filter, Sampler, SurfaceMaps, Texture, TextureId, TextureRef, UvTransform, Wrap,
@@ -189,7 +191,10 @@ impl Scene {
             match &self.shaders[id] {
                 // Built-in lobes are shade pipelines of their own (shaders/shading/),
                 // so no stage kernel is specialised to them.
-                Shader::Phong(_) | Shader::BlinnPhong(_) => {}
+                Shader::Phong(_)
+                | Shader::BlinnPhong(_)
+                | Shader::MetallicRoughness(_)
+                | Shader::SpecularGlossiness(_) => {}
                 Shader::Checker(c) => {
                     f.checker = true;
                     todo.extend([c.even, c.odd]);
@@ -221,6 +226,14 @@ impl Scene {
                     add(&p.textures.ambient);
                     add(&p.textures.diffuse);
                     add(&p.textures.specular);
+                }
+                Shader::MetallicRoughness(m) => {
+                    add(&m.textures.base_colour);
+                    add(&m.textures.metallic_roughness);
+                }
+                Shader::SpecularGlossiness(m) => {
+                    add(&m.textures.diffuse);
+                    add(&m.textures.specular_glossiness);
                 }
                 Shader::Wgsl(w) => {
                     for v in &w.values {

@@ -273,6 +273,46 @@ fn shader(i: usize, sh: &Shader, n: usize, nt: usize) -> Result<(), Invalid> {
                 ));
             }
         }
+        Shader::MetallicRoughness(m) => {
+            colour(&f("base_colour"), m.base_colour)?;
+            for (k, x) in [("metallic", m.metallic), ("roughness", m.roughness)] {
+                if !(0.0..=1.0).contains(&x) {
+                    return Err(Invalid::new(f(k), format!("must be in [0, 1], got {x}")));
+                }
+            }
+            for (k, t) in [
+                ("textures.base_colour", &m.textures.base_colour),
+                (
+                    "textures.metallic_roughness",
+                    &m.textures.metallic_roughness,
+                ),
+            ] {
+                if let Some(t) = t {
+                    texture_ref(&f(k), t, nt)?;
+                }
+            }
+        }
+        Shader::SpecularGlossiness(m) => {
+            colour(&f("diffuse"), m.diffuse)?;
+            colour(&f("specular"), m.specular)?;
+            if !(0.0..=1.0).contains(&m.glossiness) {
+                return Err(Invalid::new(
+                    f("glossiness"),
+                    format!("must be in [0, 1], got {}", m.glossiness),
+                ));
+            }
+            for (k, t) in [
+                ("textures.diffuse", &m.textures.diffuse),
+                (
+                    "textures.specular_glossiness",
+                    &m.textures.specular_glossiness,
+                ),
+            ] {
+                if let Some(t) = t {
+                    texture_ref(&f(k), t, nt)?;
+                }
+            }
+        }
         Shader::Checker(c) => {
             if !(c.size > 0.0 && c.size.is_finite()) {
                 return Err(Invalid::new(

@@ -490,6 +490,10 @@ cli_cases! {
     cli_width_not_a_number: ["--width", "abc"] => Clap, ["--width", "abc"];
     cli_width_above_maximum: ["--width", "20000"] => Clap, ["--width", "20000"];
     cli_unknown_device: ["--device", "nosuchdevice"] => OneLine, ["nosuchdevice", "available: 0: "];
+    cli_unknown_gltf_materials: ["--gltf-materials", "pbr"] => Clap, ["--gltf-materials", "pbr", "metallic-roughness"];
+    cli_exposure_not_a_number: ["--exposure", "nan"] => Clap, ["--exposure", "nan", "finite"];
+    cli_exposure_out_of_range: ["--exposure", "-100"] => Clap, ["--exposure", "-100", "[-64, 64]"];
+    cli_unknown_tonemap: ["--tonemap", "filmic"] => Clap, ["--tonemap", "filmic", "pbr-neutral"];
 }
 
 #[test]
@@ -537,6 +541,24 @@ field_cases! {
         => "background", ["non-negative"];
     negative_shininess: |v| v["shaders"]["red"]["shininess"] = json!(-2)
         => "shaders.red.shininess", [">= 0"];
+    roughness_above_one: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "roughness": 1.5})
+        => "shaders.red.roughness", ["[0, 1]", "1.5"];
+    negative_metallic: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "metallic": -0.1})
+        => "shaders.red.metallic", ["[0, 1]"];
+    negative_base_colour: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "base_colour": [0.5, -1, 0]})
+        => "shaders.red.base_colour", ["non-negative"];
+    shininess_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "shininess": 3})
+        => "shaders.red.shininess", ["not a field of a metallic_roughness shader"];
+    roughness_of_phong: |v| v["shaders"]["red"]["roughness"] = json!(0.5)
+        => "shaders.red.roughness", ["not a field of a phong shader"];
+    glossiness_above_one: |v| v["shaders"]["red"] = json!({"type": "specular_glossiness", "glossiness": 2})
+        => "shaders.red.glossiness", ["[0, 1]", "2"];
+    negative_specular_of_specular_glossiness: |v| v["shaders"]["red"] = json!({"type": "specular_glossiness", "specular": [0, -1, 0]})
+        => "shaders.red.specular", ["non-negative"];
+    glossiness_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "glossiness": 0.5})
+        => "shaders.red.glossiness", ["not a field of a metallic_roughness shader"];
+    metallic_roughness_not_a_texture: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "metallic_roughness": [1, 1, 1]})
+        => "shaders.red.metallic_roughness", ["must be a texture"];
 }
 
 // ------------------------------------------------------------------ lights
@@ -1027,7 +1049,7 @@ fn reference_refuses_a_wgsl_shader() {
         Shape::OneLine,
         &[
             &path,
-            "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker)",
+            "the f64 reference renders only the built-in shaders (phong, blinn_phong, metallic_roughness, checker)",
             "is a WGSL file",
             "toon.wgsl",
         ],
@@ -1199,6 +1221,21 @@ fn gltf_indices_above_u32_are_refused_not_wrapped() {
         |g| g["textures"][0]["source"] = json!(7),
         "textures[0].source",
         &["Index out of bounds"],
+    );
+}
+
+#[test]
+fn gltf_metallic_and_roughness_factors_outside_0_1_are_refused() {
+    // The gltf crate may read them; glTF 2.0 bounds both to [0, 1].
+    box_textured_fails(
+        |g| g["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(1.5),
+        "materials[0].pbrMetallicRoughness.roughnessFactor",
+        &["must be in [0, 1], got 1.5"],
+    );
+    box_textured_fails(
+        |g| g["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(-0.5),
+        "materials[0].pbrMetallicRoughness.metallicFactor",
+        &["must be in [0, 1], got -0.5"],
     );
 }
 

@@ -16,6 +16,7 @@ mod escaping;
 mod farm_batch;
 mod farm_slurm;
 mod farm_split;
+mod gltf_materials;
 mod gltf_render;
 mod json_textures;
 mod metrics;

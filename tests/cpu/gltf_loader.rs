@@ -645,7 +645,37 @@ fn materials_become_distinct_shaders_and_no_material_is_white() {
     );
     assert_eq!(read.notes.len(), 1, "{:?}", read.notes);
 
-    let scene = load_doc(&doc, &LoadOptions::default()).scene;
+    // glTF's own model, the default: one shader per distinct material
+    // (materials 0 and 2 are the same), glTF's defaults without one.
+    let loaded = load_doc(&doc, &LoadOptions::default());
+    let pbr: Vec<_> = loaded
+        .scene
+        .shaders
+        .iter()
+        .map(|s| match s {
+            Shader::MetallicRoughness(m) => (m.base_colour, m.metallic, m.roughness),
+            s => panic!("{s:?}"),
+        })
+        .collect();
+    assert_eq!(
+        pbr,
+        vec![
+            (Vec3::X, 1.0, 1.0),
+            (Vec3::Y, 0.0, 1.0),
+            (Vec3::ONE, 1.0, 1.0)
+        ]
+    );
+    let ids: Vec<_> = loaded.scene.objects.iter().map(|o| o.shader).collect();
+    assert_eq!(ids, vec![0, 1, 0, 2]);
+    assert_eq!(
+        notes_with(&loaded.notes, "metallic-roughness"),
+        0,
+        "applied, so not named: {:?}",
+        loaded.notes
+    );
+
+    // The seminar's mapping, on request.
+    let scene = load_doc(&doc, &phong_options()).scene;
     let diffuse: Vec<_> = scene
         .shaders
         .iter()
@@ -1317,6 +1347,21 @@ pub(crate) fn material_doc(materials: Value) -> Doc {
     doc
 }
 
+/// glTF materials as the seminar's Phong (`--gltf-materials phong`).
+fn phong_options() -> LoadOptions {
+    LoadOptions {
+        gltf_materials: penumbra::loaders::GltfMaterials::Phong,
+        ..Default::default()
+    }
+}
+
+fn pbr_of(scene: &penumbra::scene::Scene, object: usize) -> penumbra::scene::MetallicRoughness {
+    match &scene.shaders[scene.objects[object].shader] {
+        Shader::MetallicRoughness(m) => *m,
+        s => panic!("{s:?}"),
+    }
+}
+
 fn phong_of(scene: &penumbra::scene::Scene, object: usize) -> penumbra::scene::Phong {
     match &scene.shaders[scene.objects[object].shader] {
         Shader::Phong(p) => *p,
@@ -1356,7 +1401,7 @@ fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
         "KHR_materials_emissive_strength",
         "KHR_materials_clearcoat"
     ]);
-    let loaded = load_doc(&doc, &LoadOptions::default());
+    let loaded = load_doc(&doc, &phong_options());
     let scene = &loaded.scene;
 
     // One texture per (image, colour space), labelled with the file.
@@ -1396,6 +1441,15 @@ fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
     );
     assert_eq!(p.textures.diffuse, Some(base));
     assert_eq!((p.textures.ambient, p.textures.specular), (None, None));
+    // glTF's own model takes the same base colour and texture.
+    let pbr_scene = load_doc(&doc, &LoadOptions::default()).scene;
+    let m = pbr_of(&pbr_scene, 0);
+    assert_eq!(
+        (m.base_colour, m.metallic, m.roughness),
+        (Vec3::new(0.5, 0.25, 1.0), 0.0, 1.0)
+    );
+    assert_eq!(m.textures.base_colour, Some(base));
+    assert_eq!(m.textures.metallic_roughness, None);
     let maps = &scene.objects[0].maps;
     assert_eq!(maps.normal, Some((TextureRef::new(1), 0.5)));
     assert_eq!(maps.emission, Vec3::new(4.0, 2.0, 0.0));
@@ -1527,7 +1581,7 @@ fn samplers_map_every_filter_and_wrap_mode() {
     doc.root["textures"] = json!(textures);
     doc.root["samplers"] = json!(filters.iter().map(|(j, _)| j.clone()).collect::<Vec<_>>());
     doc.root["images"] = json!([{ "uri": png_uri(1, 1) }]);
-    let scene = load_doc(&doc, &LoadOptions::default()).scene;
+    let scene = load_doc(&doc, &phong_options()).scene;
     assert_eq!(scene.textures.len(), 1, "one image, one colour space");
     for (i, (_, want)) in filters.iter().enumerate() {
         let got = phong_of(&scene, i).textures.diffuse.unwrap().sampler;

@@ -580,8 +580,13 @@ fn a_mesh_without_a_shader_keeps_its_gltf_textures_after_the_scenes_own() {
     assert_eq!(s.textures.len(), 2, "w.png, then the box's image");
     assert_eq!((s.textures[0].width, s.textures[0].height), (3, 2));
     let box_object = s.objects.last().unwrap();
-    let p = phong(&s.shaders[box_object.shader]);
-    let t = p.textures.diffuse.expect("the box's base colour texture");
+    let Shader::MetallicRoughness(m) = &s.shaders[box_object.shader] else {
+        panic!("glTF's own material: {:?}", s.shaders[box_object.shader]);
+    };
+    let t = m
+        .textures
+        .base_colour
+        .expect("the box's base colour texture");
     assert_eq!(t.texture, 1, "moved past the scene's own texture");
     assert_eq!(s.textures[1].width, 211);
     // With a shader of the scene, the material (and its image) is not used.

@@ -145,7 +145,7 @@ fn shaders_share_a_file_with_their_own_params_and_checkers_name_them() {
     let why = penumbra::reference::supports(&loaded.scene).unwrap_err();
     assert!(
         why.starts_with(
-            "the f64 reference renders only the built-in shaders (phong, blinn_phong, checker); shader `shaders["
+            "the f64 reference renders only the built-in shaders (phong, blinn_phong, metallic_roughness, checker); shader `shaders["
         ),
         "{why}"
     );

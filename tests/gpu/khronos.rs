@@ -34,7 +34,7 @@ use penumbra::scene::Shader;
 
 /// Loads the committed model `rel` at `width`×`height` (its own camera, or
 /// the framing one), checks that its one texture is the `size` sRGB image
-/// its Phong material's diffuse colour reads, and renders it on the GPU,
+/// its material's base colour reads, and renders it on the GPU,
 /// which must agree with the f64 reference (an independent implementation
 /// of the same sampling, tests/gpu/reference.rs's rule: 99.5 % of pixels
 /// within 2e-3). Returns the GPU's hit pixels.
@@ -54,10 +54,10 @@ fn render_textured_model(rel: &str, width: u32, height: u32, size: (u32, u32)) -
         "{rel}"
     );
     assert!(scene.textures[0].srgb, "{rel}");
-    let Shader::Phong(p) = &scene.shaders[scene.objects[0].shader] else {
-        panic!("glTF materials are Phong");
+    let Shader::MetallicRoughness(m) = &scene.shaders[scene.objects[0].shader] else {
+        panic!("glTF materials are glTF's metallic-roughness model");
     };
-    assert!(p.textures.diffuse.is_some(), "{rel}");
+    assert!(m.textures.base_colour.is_some(), "{rel}");
 
     let kernel = support::renderer().kernel();
     let sampling = penumbra::render::Sampling::default();

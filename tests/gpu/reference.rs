@@ -270,6 +270,72 @@ fn bunny_matches_the_gpu() {
     );
 }
 
+/// glTF's metallic-roughness BRDF: metal and dielectric spheres from
+/// roughness 0.05 to 1 on a half-metal floor, and two spheres of the
+/// specular-glossiness model, under a directional, a point
+/// and a spot light of different colours (each light's diffuse colour
+/// differs from its specular one, so the split of the BRDF between them is
+/// compared too).
+#[test]
+fn metallic_roughness_matches_the_gpu() {
+    let mut shaders = vec![
+        r#""floor": {"type": "metallic_roughness", "base_colour": [0.5, 0.5, 0.45], "metallic": 0.5, "roughness": 0.7}"#.to_string(),
+    ];
+    let mut objects = vec![
+        r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"}"#
+            .to_string(),
+    ];
+    // KHR_materials_pbrSpecularGlossiness's model beside them (behind).
+    for (i, glossiness) in [0.4, 0.9].iter().enumerate() {
+        let name = format!("sg{i}");
+        shaders.push(format!(
+            r#""{name}": {{"type": "specular_glossiness", "diffuse": [0.2, 0.5, 0.3], "specular": [0.6, 0.4, 0.2], "glossiness": {glossiness}}}"#
+        ));
+        objects.push(format!(
+            r#"{{"type": "sphere", "center": [{}, 0.5, -1.8], "radius": 0.45, "shader": "{name}"}}"#,
+            i as f64 * 1.1 - 0.55
+        ));
+    }
+    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+        for (j, metallic) in [0.0, 1.0].iter().enumerate() {
+            let name = format!("m{i}{j}");
+            shaders.push(format!(
+                r#""{name}": {{"type": "metallic_roughness", "base_colour": [0.9, 0.5, 0.2], "metallic": {metallic}, "roughness": {roughness}}}"#
+            ));
+            objects.push(format!(
+                r#"{{"type": "sphere", "center": [{}, 0.5, {}], "radius": 0.45, "shader": "{name}"}}"#,
+                i as f64 * 1.1 - 1.65,
+                j as f64 * 1.2 - 0.6
+            ));
+        }
+    }
+    let json = format!(
+        r#"{{
+  "camera": {{"position": [0, 2.5, 4.5], "look_at": [0, 0.3, 0], "up": [0, 1, 0], "fov": 45, "width": 160, "height": 100}},
+  "background": [0.05, 0.05, 0.05],
+  "shaders": {{ {} }},
+  "objects": [ {} ],
+  "lights": [
+    {{"type": "directional", "direction": [0.4, -1, -0.5], "intensity": 1.5, "ambient": [0, 0, 0], "diffuse": [1, 0.9, 0.8], "specular": [0.8, 0.9, 1]}},
+    {{"type": "point", "position": [2, 2, 2], "intensity": 6, "ambient": [0, 0, 0], "diffuse": [0.5, 0.7, 1], "specular": [1, 1, 1]}},
+    {{"type": "spot", "position": [-2, 3, 1], "direction": [0.5, -1, -0.3], "inner_angle": 15, "outer_angle": 30, "intensity": 10, "ambient": [0, 0, 0], "diffuse": [1, 0.8, 0.6], "specular": [1, 0.8, 0.6]}}
+  ]
+}}"#,
+        shaders.join(", "),
+        objects.join(", ")
+    );
+    let scene = support::load_json(&json);
+    let kinds = |f: fn(&Shader) -> bool| scene.shaders.iter().filter(|s| f(s)).count();
+    assert_eq!(kinds(|s| matches!(s, Shader::MetallicRoughness(_))), 9);
+    assert_eq!(kinds(|s| matches!(s, Shader::SpecularGlossiness(_))), 2);
+    gpu_vs_reference(
+        "metallic_roughness",
+        &scene,
+        KernelOptions::default(),
+        Sampling::default(),
+    );
+}
+
 /// The benchmark scene at 1024×1024 against Embree's figures (see
 /// tests/gpu/bunny.rs, which separates ground and bunny the same way):
 /// 858,452 primary rays hit (149,894 the bunny), and 31,540 ground points are

@@ -31,6 +31,17 @@ pub struct RenderArgs {
     /// out.png. With --batch, the folder the images go to.
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Exposure in stops: the PNG output's linear values are scaled by 2^EV
+    /// before tone mapping (EXR output stays linear and untouched).
+    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true,
+          value_parser = parse_exposure)]
+    exposure: f32,
+    /// Tone mapping of the PNG output: `none` (clamp to [0, 1]) or
+    /// `pbr-neutral` (Khronos PBR Neutral; docs/materials.md). EXR output
+    /// stays linear and untouched.
+    #[arg(long, value_name = "MAP", default_value = "none",
+          value_parser = |s: &str| s.parse::<penumbra::tonemap::ToneMap>())]
+    tonemap: penumbra::tonemap::ToneMap,
     /// Image width in pixels (overrides the scene's).
     #[arg(long, value_parser = side_parser())]
     width: Option<u32>,
@@ -262,7 +273,7 @@ fn render_image(
     let t1 = Instant::now();
     match (args.aov, &aovs) {
         (Some(set), Some(a)) => output::write_exr_with_aovs(out, &frame.image, a, set)?,
-        _ => output::write_image(out, &frame.image)?,
+        _ => output::write_image(out, &*display(&frame.image, args, out)?)?,
     }
     let write = t1.elapsed();
     println!(
@@ -288,4 +299,31 @@ fn scene_error(e: RenderError, scene: &Path, args: &RenderArgs) -> anyhow::Error
         }
         e => e.into(),
     }
+}
+
+/// `--exposure`: a finite number of stops in [-64, 64].
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(ev) if ev.is_finite() && (-64.0..=64.0).contains(&ev) => Ok(ev),
+        _ => Err("expected a finite number of stops in [-64, 64]".into()),
+    }
+}
+
+/// The image as written to `out`: a PNG gets `--exposure` and `--tonemap`
+/// (nothing changes at their defaults), an EXR stays linear.
+fn display<'a>(
+    image: &'a penumbra::frame::Image,
+    args: &RenderArgs,
+    out: &Path,
+) -> anyhow::Result<std::borrow::Cow<'a, penumbra::frame::Image>> {
+    use penumbra::tonemap::{apply, ToneMap};
+    let png = output::Format::from_path(out)? == output::Format::Png;
+    if !png || (args.exposure == 0.0 && args.tonemap == ToneMap::None) {
+        return Ok(std::borrow::Cow::Borrowed(image));
+    }
+    Ok(std::borrow::Cow::Owned(apply(
+        image,
+        args.exposure,
+        args.tonemap,
+    )))
 }

@@ -1,14 +1,20 @@
-//! glTF materials as penumbra's Phong shader and [`SurfaceMaps`], and the
+//! glTF materials as penumbra's shaders and [`SurfaceMaps`], and the
 //! textures, images and samplers they use.
 //!
-//! A material becomes `Phong { ambient: 0, diffuse: baseColorFactor.rgb,
-//! specular: 0, shininess: 1 }` with `baseColorTexture` as its diffuse
-//! texture; its normal map, emission and alpha become the primitive's
-//! [`SurfaceMaps`]. Metallic-roughness and occlusion have no meaning in
-//! the Phong model: they are named in a note, not applied (a material with
-//! `metallicFactor` 0, `roughnessFactor` 1 and no metallic-roughness
-//! texture is the diffuse surface Phong draws, and gets no note; glTF's
-//! defaults, 1 and 1, are a rough metal and do).
+//! A material becomes two shaders, of which the load options pick one
+//! ([`crate::loaders::GltfMaterials`]): glTF's own model,
+//! [`MetallicRoughness`] (`baseColorFactor`, `metallicFactor`,
+//! `roughnessFactor`, `baseColorTexture`, `metallicRoughnessTexture`), the
+//! default; and the seminar's mapping, `Phong { ambient: 0, diffuse:
+//! baseColorFactor.rgb, specular: 0, shininess: 1 }` with
+//! `baseColorTexture` as its diffuse texture, kept so that older renders can
+//! be reproduced. Its normal map, emission and alpha become the primitive's
+//! [`SurfaceMaps`]. Under Phong, metallic-roughness has no meaning: it is
+//! named in a note, not applied (a material with `metallicFactor` 0,
+//! `roughnessFactor` 1 and no metallic-roughness texture is the diffuse
+//! surface Phong draws, and gets no note; glTF's defaults, 1 and 1, are a
+//! rough metal and do). Occlusion applies to indirect light only, which
+//! penumbra's punctual lights are not: it is named in a note.
 //!
 //! Images are decoded once per (image, colour space): a colour use (base
 //! colour, emission) is sRGB, a normal map linear, so an image used both
@@ -22,7 +28,9 @@ use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use super::{Reader, Result};
 use crate::loaders::texture;
 use crate::scene::{
-    AlphaMode, Filter, Phong, Sampler, SurfaceMaps, TextureId, TextureRef, UvTransform, Wrap,
+    AlphaMode, Filter, MetallicRoughness, MetallicRoughnessTextures, Phong, Sampler,
+    SpecularGlossiness, SpecularGlossinessTextures, SurfaceMaps, TextureId, TextureRef,
+    UvTransform, Wrap,
 };
 
 /// What one glTF material gives a primitive: its shader and its maps. The
@@ -31,10 +39,17 @@ use crate::scene::{
 pub(super) struct Material {
     /// Linear RGB of `baseColorFactor`; `None` for the default material.
     pub base_color: Option<Vec3>,
-    /// The Phong shader the material maps to.
+    /// The Phong shader of the seminar's mapping.
     pub phong: Phong,
+    /// glTF's own model.
+    pub pbr: MetallicRoughness,
     /// Normal map, emission and alpha.
     pub maps: SurfaceMaps,
+    /// KHR_materials_unlit: the base colour (factor × texture) is the
+    /// colour, lights do not shade it (`maps.emission` holds it).
+    pub unlit: bool,
+    /// KHR_materials_pbrSpecularGlossiness, which replaces `pbr` where given.
+    pub specular_glossiness: Option<SpecularGlossiness>,
 }
 
 /// glTF's default material: white, opaque, no maps.
@@ -51,7 +66,19 @@ const DEFAULT: Material = Material {
             specular: None,
         },
     },
+    // glTF 2.0, 3.9.1: metallicFactor and roughnessFactor default to 1.
+    pbr: MetallicRoughness {
+        base_colour: Vec3::ONE,
+        metallic: 1.0,
+        roughness: 1.0,
+        textures: MetallicRoughnessTextures {
+            base_colour: None,
+            metallic_roughness: None,
+        },
+    },
     maps: SurfaceMaps::NONE,
+    unlit: false,
+    specular_glossiness: None,
 };
 
 /// The extensions whose meaning penumbra applies; every other one in
@@ -60,6 +87,8 @@ pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
+    "KHR_materials_pbrSpecularGlossiness",
 ];
 
 impl Reader<'_> {
@@ -83,6 +112,20 @@ impl Reader<'_> {
             let field = f("pbrMetallicRoughness.baseColorFactor");
             return self.fail(field, format!("alpha must be in [0, 1], got {alpha}"));
         }
+        let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+        for (k, x) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+            if !(0.0..=1.0).contains(&x) {
+                let field = f(&format!("pbrMetallicRoughness.{k}"));
+                return self.fail(field, format!("must be in [0, 1], got {x}"));
+            }
+        }
+        let metallic_roughness = match pbr.metallic_roughness_texture() {
+            Some(info) => {
+                let field = f("pbrMetallicRoughness.metallicRoughnessTexture");
+                Some(self.info(&info, &field, false)?)
+            }
+            None => None,
+        };
         // Metallic 0 and roughness 1 without a texture is the diffuse
         // surface that Phong draws; anything else looks different.
         self.flags.metallic_roughness |= pbr.metallic_factor() != 0.0
@@ -143,14 +186,33 @@ impl Reader<'_> {
             }
             gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         };
+        let specular_glossiness = match material.pbr_specular_glossiness() {
+            Some(sg) => Some(self.specular_glossiness(m, &sg)?),
+            None => None,
+        };
+        // KHR_materials_unlit: the base colour is emitted as it is (the
+        // emission's own factors are not part of an unlit material).
+        let unlit = self.has_extension(m, "KHR_materials_unlit");
+        let (emission, emission_texture) = match unlit {
+            true => (c, base_texture),
+            false => (factor * strength, emission_texture),
+        };
+        // Alpha comes from the base colour texture, the same use (the
+        // diffuse ones under KHR_materials_pbrSpecularGlossiness).
+        let (alpha, alpha_texture) = match &specular_glossiness {
+            Some((_, a)) => (
+                *a,
+                specular_glossiness.and_then(|(s, _)| s.textures.diffuse),
+            ),
+            None => (alpha, base_texture),
+        };
         let maps = SurfaceMaps {
             normal,
-            emission: factor * strength,
+            emission,
             emission_texture,
             alpha_mode,
             opacity: alpha,
-            // Alpha comes from the base colour texture, the same use.
-            opacity_texture: base_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
+            opacity_texture: alpha_texture.filter(|_| alpha_mode != AlphaMode::Opaque),
         };
         let phong = Phong {
             textures: crate::scene::PhongTextures {
@@ -160,10 +222,22 @@ impl Reader<'_> {
             diffuse: c,
             ..DEFAULT.phong
         };
+        let pbr = MetallicRoughness {
+            base_colour: c,
+            metallic,
+            roughness,
+            textures: MetallicRoughnessTextures {
+                base_colour: base_texture,
+                metallic_roughness,
+            },
+        };
         let done = Material {
             base_color: Some(c),
             phong,
+            pbr,
             maps,
+            unlit,
+            specular_glossiness: specular_glossiness.map(|(s, _)| s),
         };
         if self.materials.len() <= m {
             self.materials.resize(m + 1, None);
@@ -214,6 +288,67 @@ impl Reader<'_> {
             tex_coord,
             transform,
         })
+    }
+
+    /// `materials[m]`'s KHR_materials_pbrSpecularGlossiness and the alpha
+    /// of its `diffuseFactor`.
+    fn specular_glossiness(
+        &mut self,
+        m: usize,
+        sg: &gltf::material::PbrSpecularGlossiness,
+    ) -> Result<(SpecularGlossiness, f32)> {
+        let at =
+            |k: &str| format!("materials[{m}].extensions.KHR_materials_pbrSpecularGlossiness.{k}");
+        let [r, g, b, a] = sg.diffuse_factor();
+        let diffuse = Vec3::new(r, g, b);
+        let specular = Vec3::from_array(sg.specular_factor());
+        for (k, c) in [("diffuseFactor", diffuse), ("specularFactor", specular)] {
+            if !c.is_finite() || c.min_element() < 0.0 {
+                return self.fail(at(k), format!("must be finite and non-negative, got {c}"));
+            }
+        }
+        if !(0.0..=1.0).contains(&a) {
+            return self.fail(
+                at("diffuseFactor"),
+                format!("alpha must be in [0, 1], got {a}"),
+            );
+        }
+        let glossiness = sg.glossiness_factor();
+        if !(0.0..=1.0).contains(&glossiness) {
+            let message = format!("must be in [0, 1], got {glossiness}");
+            return self.fail(at("glossinessFactor"), message);
+        }
+        let diffuse_texture = match sg.diffuse_texture() {
+            Some(info) => Some(self.info(&info, &at("diffuseTexture"), true)?),
+            None => None,
+        };
+        // Specular in sRGB RGB, glossiness in linear A: an sRGB texture's
+        // alpha is linear.
+        let specular_glossiness = match sg.specular_glossiness_texture() {
+            Some(info) => Some(self.info(&info, &at("specularGlossinessTexture"), true)?),
+            None => None,
+        };
+        let s = SpecularGlossiness {
+            diffuse,
+            specular,
+            glossiness,
+            textures: SpecularGlossinessTextures {
+                diffuse: diffuse_texture,
+                specular_glossiness,
+            },
+        };
+        Ok((s, a))
+    }
+
+    /// Whether `materials[m].extensions` has `name` (read from the JSON
+    /// itself, as the crate's optional features for it are off).
+    fn has_extension(&mut self, m: usize, name: &str) -> bool {
+        if self.raw.is_none() {
+            let value = serde_json::from_slice(self.json).unwrap_or(serde_json::Value::Null);
+            self.raw = Some(value);
+        }
+        let raw = self.raw.as_ref().expect("parsed above");
+        raw["materials"][m]["extensions"][name].is_object()
     }
 
     /// KHR_texture_transform of `materials[m].normalTexture`, which the

@@ -41,9 +41,10 @@ pub use self::cameras::{CameraChoice, PlacedCamera};
 use self::quantization::Attribute;
 use super::guard::Guard;
 use super::{LoadOptions, Loaded};
+use crate::loaders::GltfMaterials;
 use crate::scene::{
-    Camera, Light, LightKind, Mesh, Object, Phong, Projection, Scene, Shader, Shape, SurfaceMaps,
-    Texture, TextureId,
+    Camera, Light, LightKind, Mesh, MetallicRoughness, Object, Phong, Projection, Scene, Shader,
+    Shape, SurfaceMaps, Texture, TextureId,
 };
 use crate::SceneError;
 
@@ -60,6 +61,12 @@ pub struct GltfMesh {
     /// The Phong shader of its material (module [`material`]); its
     /// textures index [`GltfDocument::textures`].
     pub phong: Phong,
+    /// Its material as glTF's metallic-roughness model; textures as `phong`'s.
+    pub pbr: MetallicRoughness,
+    /// KHR_materials_unlit: `maps.emission` is its colour; use [`UNLIT`].
+    pub unlit: bool,
+    /// KHR_materials_pbrSpecularGlossiness, used instead of `pbr` where given.
+    pub specular_glossiness: Option<crate::scene::SpecularGlossiness>,
     /// The material's normal map, emission and alpha; textures index
     /// [`GltfDocument::textures`].
     pub maps: SurfaceMaps,
@@ -126,9 +133,13 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         return Err(SceneError::new(path, field, message));
     }
 
-    // One Phong shader per distinct shader (colour and textures), in order
-    // of first use; the maps stay per object.
-    let mut phongs: Vec<Phong> = Vec::new();
+    // One shader per distinct shader (colour and textures), in order of
+    // first use; the maps stay per object.
+    let pbr = opts.gltf_materials == GltfMaterials::MetallicRoughness;
+    if pbr {
+        notes.retain(|n| !n.ends_with(METALLIC_ROUGHNESS_NOTE));
+    }
+    let mut shaders: Vec<Shader> = Vec::new();
     let mut objects = Vec::with_capacity(doc.meshes.len());
     let mut origins = Vec::with_capacity(doc.meshes.len());
     for m in doc.meshes {
@@ -136,12 +147,18 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             primitive: m.primitive,
             material: m.material,
         });
-        let shader = phongs
+        let wanted = match (m.unlit, pbr, m.specular_glossiness) {
+            (true, _, _) => Shader::Phong(UNLIT),
+            (false, true, Some(sg)) => Shader::SpecularGlossiness(sg),
+            (false, true, None) => Shader::MetallicRoughness(m.pbr),
+            (false, false, _) => Shader::Phong(m.phong),
+        };
+        let shader = shaders
             .iter()
-            .position(|p| *p == m.phong)
+            .position(|s| *s == wanted)
             .unwrap_or_else(|| {
-                phongs.push(m.phong);
-                phongs.len() - 1
+                shaders.push(wanted);
+                shaders.len() - 1
             });
         objects.push(Object {
             maps: m.maps,
@@ -149,7 +166,6 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             shader,
         });
     }
-    let shaders = phongs.into_iter().map(Shader::Phong).collect();
 
     let chosen = cameras::choose(path, &opts.camera, &doc.cameras)?;
     let (width, height) = image_size(opts, chosen.and_then(|c| c.camera.aspect_ratio));
@@ -189,7 +205,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
              (a key light over its shoulder and a weaker fill light from it)",
             path.display()
         ));
-        lights.extend(default_lights(&camera));
+        // Under glTF's BRDF a white dielectric reflects about c/π: the
+        // default lights are π times brighter there, so that a diffuse
+        // model is as bright as under the seminar's Phong mapping.
+        let scale = if pbr { std::f32::consts::PI } else { 1.0 };
+        lights.extend(default_lights(&camera, scale));
     }
     let scene = Scene {
         textures: doc.textures,
@@ -243,13 +263,14 @@ pub const DEFAULT_LIGHTS: [(DVec3, f32); 2] = [
 /// White directional lights fixed to the camera ([`DEFAULT_LIGHTS`]), as
 /// model viewers light what they show: wherever the file's camera or the
 /// framing camera looks from, what it sees is lit.
-fn default_lights(camera: &Camera) -> [Light; 2] {
+/// Their intensities are multiplied by `scale`.
+fn default_lights(camera: &Camera, scale: f32) -> [Light; 2] {
     let o = camera.orientation;
     DEFAULT_LIGHTS.map(|(d, intensity)| Light {
         kind: LightKind::Directional {
             direction: (o * d).normalize(),
         },
-        intensity,
+        intensity: intensity * scale,
         ambient: Vec3::ZERO,
         diffuse: Vec3::ONE,
         specular: Vec3::ONE,
@@ -379,9 +400,7 @@ fn walk(
         notes.push(format!("{file}: {note}"));
     }
     if f.metallic_roughness {
-        let note = "metallic-roughness (metallicFactor, roughnessFactor, \
-                    metallicRoughnessTexture) is not applied: materials are diffuse Phong";
-        notes.push(format!("{file}: {note}"));
+        notes.push(format!("{file}: {METALLIC_ROUGHNESS_NOTE}"));
     }
     if f.occlusion {
         notes.push(format!("{file}: occlusionTexture is not applied"));
@@ -404,6 +423,27 @@ fn walk(
     let doc = std::mem::replace(&mut r.doc, empty_document(path));
     Ok((doc, Some(scene.index())))
 }
+
+/// The shader of a KHR_materials_unlit material: one that reflects
+/// nothing, so that the point's colour is its emission, the base colour.
+pub const UNLIT: Phong = Phong {
+    ambient: glam::Vec3::ZERO,
+    diffuse: glam::Vec3::ZERO,
+    specular: glam::Vec3::ZERO,
+    shininess: 1.0,
+    textures: crate::scene::PhongTextures {
+        ambient: None,
+        diffuse: None,
+        specular: None,
+    },
+};
+
+/// The note on files whose materials are not diffuse, which Phong drops
+/// (`--gltf-materials phong`, and meshes of JSON scenes, whose shaders the
+/// scene names).
+pub(crate) const METALLIC_ROUGHNESS_NOTE: &str =
+    "metallic-roughness (metallicFactor, roughnessFactor, \
+     metallicRoughnessTexture) is not applied: materials are diffuse Phong";
 
 /// The nodes of `scene` depth first, children in file order, each with the
 /// position of its parent in the list; `Err(node)` for a node reached twice.
@@ -856,6 +896,9 @@ impl Reader<'_> {
             mesh,
             base_color: material.base_color,
             phong: material.phong,
+            pbr: material.pbr,
+            unlit: material.unlit,
+            specular_glossiness: material.specular_glossiness,
             maps: material.maps,
             name,
             primitive: field.to_string(),

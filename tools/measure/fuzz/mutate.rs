@@ -88,7 +88,14 @@ fn key_values(key: &str, context: &str) -> Option<Vec<Value>> {
                 strs(&["directional", "point", "spot", "rect", "sphere", "area"])
             }
             "objects" => strs(&["plane", "sphere", "triangle", "mesh", "cone"]),
-            "shaders" => strs(&["phong", "blinn_phong", "checker", "wgsl"]),
+            "shaders" => strs(&[
+                "phong",
+                "blinn_phong",
+                "metallic_roughness",
+                "specular_glossiness",
+                "checker",
+                "wgsl",
+            ]),
             _ => strs(&["SCALAR", "perspective", "point", "sphere", "phong", "bogus"]),
         },
         "mode" => nums(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]),

@@ -276,6 +276,8 @@ fn generated_scenes() -> Vec<Value> {
         "shaders": {
             "red": {"type": "phong", "ambient": [0.1, 0, 0], "diffuse": [0.8, 0.1, 0.1], "specular": [1, 1, 1], "shininess": 20},
             "blue": {"type": "blinn_phong", "diffuse": [0.1, 0.1, 0.8], "shininess": 1},
+            "gold": {"type": "metallic_roughness", "base_colour": [1, 0.77, 0.34], "metallic": 1, "roughness": 0.3},
+            "satin": {"type": "specular_glossiness", "diffuse": [0.3, 0.5, 0.2], "specular": [0.1, 0.1, 0.1], "glossiness": 0.6},
             "board": {"type": "checker", "size": 0.5, "even": "red", "odd": "inner"},
             "inner": {"type": "checker", "size": 0.1, "even": "blue", "odd": "red"},
             "toon": {"type": "wgsl", "file": "shaders/toon.wgsl",
@@ -285,6 +287,8 @@ fn generated_scenes() -> Vec<Value> {
             {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "board"},
             {"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "shader": "toon"},
             {"type": "triangle", "vertices": [[-1, 0, 0], [1, 0, 0], [0, 1, -1]], "shader": "blue"},
+            {"type": "triangle", "vertices": [[-1, 0, 1], [0, 0, 1], [-0.5, 1, 1]], "shader": "gold"},
+            {"type": "triangle", "vertices": [[0, 0, 1], [1, 0, 1], [0.5, 1, 1]], "shader": "satin"},
             {"type": "mesh", "file": "bunny.glb", "transform": {"translate": [1, 0, 0], "rotate": [0, 30, 0], "scale": [1, 2, 1]}}
         ],
         "lights": [

@@ -12,7 +12,7 @@ pub fn section(o: &mut String, r: &Results) {
     let _ = writeln!(o, "## 1. Throughput and phases\n");
     let _ = writeln!(
         o,
-        "`scenes/bunny_scene.glb` at its own camera and size. Each scene is uploaded once (`Renderer::upload`) and rendered repeatedly (`render_uploaded`): the first frame compiles the kernel (naga, pipeline creation, lavapipe's compile at the first dispatch — measured with an empty warm-up dispatch, kept out of the frame), then one warm-up frame, then the measured frames. Rays are counted by the kernel (`RenderStats`); Mrays/s = (primary + shadow rays) / render phase.\n"
+        "`scenes/bunny_scene.glb` at its own camera and size. Each scene is uploaded once (`Renderer::upload`) and rendered repeatedly (`Renderer::render`): the first frame compiles the kernel (naga, pipeline creation, lavapipe's compile at the first dispatch — measured with an empty warm-up dispatch, kept out of the frame), then one warm-up frame, then the measured frames. Rays are counted by the kernel (`RenderStats`); Mrays/s = (primary + shadow rays) / render phase.\n"
     );
     if let Some(b) = big {
         let _ = writeln!(
