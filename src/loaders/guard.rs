@@ -225,6 +225,12 @@ impl Guard {
         Ok(())
     }
 
+    /// Whether `extra` bytes more than those charged fit the budget, for a
+    /// while (decoding images at once: module `gltf::decode`).
+    pub fn fits(&self, extra: u64) -> bool {
+        self.bytes.get().saturating_add(extra) <= self.max_bytes
+    }
+
     /// Bytes charged so far (files read and geometry admitted).
     pub fn bytes(&self) -> u64 {
         self.bytes.get()

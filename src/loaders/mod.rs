@@ -33,6 +33,8 @@ pub struct LoadOptions {
     pub max_texture_bytes: u64,
     /// Which shader glTF materials become (`--gltf-materials`).
     pub gltf_materials: GltfMaterials,
+    /// Which of a glTF file's cameras to render from (`--camera`).
+    pub camera: gltf::CameraChoice,
 }
 
 /// The shader of a glTF file's materials (`--gltf-materials`).
@@ -68,6 +70,7 @@ impl Default for LoadOptions {
             max_scene_bytes: guard::DEFAULT_MAX_SCENE_BYTES,
             max_triangles: guard::DEFAULT_MAX_TRIANGLES,
             max_texture_bytes: u64::MAX,
+            camera: gltf::CameraChoice::File,
             gltf_materials: GltfMaterials::default(),
         }
     }
@@ -94,6 +97,11 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError>
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     let loaded = match ext.as_str() {
+        "json" if opts.camera != gltf::CameraChoice::File => {
+            let message =
+                "--camera chooses among a glTF file's cameras; a JSON scene has one camera";
+            return Err(SceneError::new(path, "camera", message));
+        }
         "json" => json::load(path, opts)?,
         "gltf" | "glb" => gltf::load(path, opts)?,
         _ => {

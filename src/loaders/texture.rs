@@ -39,15 +39,44 @@ pub fn decode(
     srgb: bool,
     guard: &Guard,
 ) -> Result<Texture, Refused> {
-    let format = format_of(bytes, mime)?;
+    prepare(bytes.to_vec(), mime, label, srgb, guard)?.decode()
+}
+
+/// An image whose header [`prepare`] has checked and whose memory it has
+/// charged: [`Pending::decode`] decodes it, on any thread (issue 39: the
+/// glTF loader decodes its images in parallel).
+#[derive(Debug)]
+pub struct Pending {
+    bytes: Vec<u8>,
+    format: ImageFormat,
+    label: String,
+    srgb: bool,
+    /// The decoder's output, bytes, from the header.
+    decoded: u64,
+    /// What decoding holds for a while beyond what it keeps
+    /// ([`texture_bytes`]).
+    pub transient: u64,
+}
+
+/// [`decode`]'s checks, everything before the decode itself: the format,
+/// the header's size against the limits and the memory budget (charged
+/// here), and whether the bytes can hold that many texels.
+pub fn prepare(
+    bytes: Vec<u8>,
+    mime: Option<&str>,
+    label: &str,
+    srgb: bool,
+    guard: &Guard,
+) -> Result<Pending, Refused> {
+    let format = format_of(&bytes, mime)?;
     let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
-    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), format);
+    let mut reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
     // Reading the header may allocate little; its size is checked here,
     // with the size in the message, before the decode's limits are set.
     let mut header = image::Limits::default();
     header.max_alloc = Some(DECODER_SLACK);
     reader.limits(header);
-    let mut decoder = reader.into_decoder().map_err(corrupt)?;
+    let decoder = reader.into_decoder().map_err(corrupt)?;
     let (width, height) = decoder.dimensions();
     if width == 0 || height == 0 {
         return Err(Refused(format!("is an empty image ({width}×{height})")));
@@ -61,22 +90,43 @@ pub fn decode(
     let (transient, kept) = texture_bytes(width, height, decoded);
     guard.charge_texture(width, height, transient, kept)?;
     check_holds(format, width, height, bytes.len())?;
-    decoder
-        .set_limits(limits(decoded.saturating_add(DECODER_SLACK)))
-        .map_err(corrupt)?;
-    let image = image::DynamicImage::from_decoder(decoder).map_err(corrupt)?;
-    Ok(Texture {
+    drop(decoder);
+    Ok(Pending {
+        bytes,
+        format,
         label: label.to_string(),
-        file: None,
-        width,
-        height,
-        texels: rgba_texels(image),
         srgb,
+        decoded,
+        transient,
     })
 }
 
-/// The image format of `bytes`, which must be PNG or JPEG and agree with
-/// the declared `mime` type when there is one.
+impl Pending {
+    /// Decodes the image, within the limits its header set.
+    pub fn decode(self) -> Result<Texture, Refused> {
+        let format = self.format;
+        let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
+        let mut reader = image::ImageReader::with_format(Cursor::new(&self.bytes[..]), format);
+        let mut header = image::Limits::default();
+        header.max_alloc = Some(DECODER_SLACK);
+        reader.limits(header);
+        let mut decoder = reader.into_decoder().map_err(corrupt)?;
+        let (width, height) = decoder.dimensions();
+        decoder
+            .set_limits(limits(self.decoded.saturating_add(DECODER_SLACK)))
+            .map_err(corrupt)?;
+        let image = image::DynamicImage::from_decoder(decoder).map_err(corrupt)?;
+        Ok(Texture {
+            label: self.label,
+            file: None,
+            width,
+            height,
+            texels: rgba_texels(image),
+            srgb: self.srgb,
+        })
+    }
+}
+
 fn format_of(bytes: &[u8], mime: Option<&str>) -> Result<ImageFormat, Refused> {
     let format = match image::guess_format(bytes) {
         Ok(f @ (ImageFormat::Png | ImageFormat::Jpeg)) => f,

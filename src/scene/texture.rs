@@ -190,33 +190,43 @@ impl Texture {
     /// the mean of the four under it (edges clamped), in linear light for
     /// the colour channels of an sRGB texture.
     fn half(&self, width: u32, height: u32, texels: &[[u8; 4]]) -> MipLevel {
+        use rayon::prelude::*;
         let (w, h) = ((width / 2).max(1), (height / 2).max(1));
-        let mut out = Vec::with_capacity((w * h) as usize);
-        for y in 0..h {
-            for x in 0..w {
-                let mut sum = [0.0f64; 4];
-                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                    let sx = (2 * x + dx).min(width - 1);
-                    let sy = (2 * y + dy).min(height - 1);
-                    let t = texels[(sy * width + sx) as usize];
-                    for (c, s) in sum.iter_mut().enumerate() {
-                        *s += if self.srgb && c < 3 {
-                            srgb_to_linear(t[c])
+        // The same values as `srgb_to_linear` (a table, not a `powf` per
+        // texel and channel), and rows in parallel (issue 39): the levels
+        // do not depend on the order.
+        let linear: [f64; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
+        let unorm: [f64; 256] = std::array::from_fn(|b| b as f64 / 255.0);
+        let mut out = vec![[0u8; 4]; (w * h) as usize];
+        out.par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let y = y as u32;
+                for (x, texel) in row.iter_mut().enumerate() {
+                    let x = x as u32;
+                    let mut sum = [0.0f64; 4];
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let sx = (2 * x + dx).min(width - 1);
+                        let sy = (2 * y + dy).min(height - 1);
+                        let t = texels[(sy * width + sx) as usize];
+                        for (c, s) in sum.iter_mut().enumerate() {
+                            *s += if self.srgb && c < 3 {
+                                linear[t[c] as usize]
+                            } else {
+                                unorm[t[c] as usize]
+                            };
+                        }
+                    }
+                    *texel = std::array::from_fn(|c| {
+                        let mean = sum[c] / 4.0;
+                        if self.srgb && c < 3 {
+                            linear_to_srgb8(mean)
                         } else {
-                            f64::from(t[c]) / 255.0
-                        };
-                    }
+                            (mean * 255.0).round() as u8
+                        }
+                    });
                 }
-                out.push(std::array::from_fn(|c| {
-                    let mean = sum[c] / 4.0;
-                    if self.srgb && c < 3 {
-                        linear_to_srgb8(mean)
-                    } else {
-                        (mean * 255.0).round() as u8
-                    }
-                }));
-            }
-        }
+            });
         MipLevel {
             width: w,
             height: h,

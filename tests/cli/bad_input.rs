@@ -1253,6 +1253,130 @@ fn gltf_texture_transform_errors_name_the_files_field() {
 }
 
 #[test]
+fn gltf_draco_and_basisu_are_refused_by_name_before_the_crates_validation() {
+    // As Duck's glTF-Draco variant: the accessors have no bufferView (the
+    // data is in the Draco stream), which the crate's validation reports
+    // as "Missing data" unless the extension is named first.
+    box_textured_fails(
+        |g| {
+            g["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+            g["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+            g["accessors"][0]
+                .as_object_mut()
+                .unwrap()
+                .remove("bufferView");
+            g["meshes"][0]["primitives"][0]["extensions"] = json!({
+                "KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}
+            });
+        },
+        "extensionsRequired[0]",
+        &[
+            "requires KHR_draco_mesh_compression",
+            "uncompressed variant",
+        ],
+    );
+    // As StainedGlassLamp's KTX variant: a texture with no `source`.
+    box_textured_fails(
+        |g| {
+            g["extensionsUsed"] = json!(["KHR_texture_basisu"]);
+            g["extensionsRequired"] = json!(["KHR_texture_basisu"]);
+            g["textures"][0].as_object_mut().unwrap().remove("source");
+            g["textures"][0]["extensions"] = json!({"KHR_texture_basisu": {"source": 0}});
+        },
+        "extensionsRequired[0]",
+        &["requires KHR_texture_basisu", "PNG"],
+    );
+    // Any other unknown required extension is named too.
+    box_textured_fails(
+        |g| g["extensionsRequired"] = json!(["KHR_texture_transform", "EXT_made_up"]),
+        "extensionsRequired[1]",
+        &["requires extension EXT_made_up, which penumbra does not support"],
+    );
+}
+
+#[test]
+fn gltf_quantized_meshopt_and_instancing_errors_name_the_files_field() {
+    // A NORMAL of unsigned bytes: not allowed, even with KHR_mesh_quantization.
+    box_textured_fails(
+        |g| {
+            g["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+            g["accessors"][1]["componentType"] = json!(5121);
+            g["accessors"][1]["normalized"] = json!(true);
+        },
+        "meshes[0].primitives[0].attributes.NORMAL",
+        &["accessors[1] is normalized UNSIGNED_BYTE, expected FLOAT, normalized BYTE, normalized SHORT"],
+    );
+    // A meshopt bomb: 72 bytes claiming 2^32 elements of 252 bytes, refused
+    // from the declared size before anything is allocated.
+    box_textured_fails(
+        |g| {
+            let count = 1u64 << 32;
+            g["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
+            g["bufferViews"][0]["byteLength"] = json!(count * 252);
+            g["bufferViews"][0]["extensions"] = json!({"EXT_meshopt_compression": {
+                "buffer": 0, "byteOffset": 768, "byteLength": 72, "byteStride": 252,
+                "count": count, "mode": "ATTRIBUTES"}});
+        },
+        "bufferViews[0].extensions.EXT_meshopt_compression.count",
+        &[
+            "with this view's 1082331758592 decoded bytes",
+            "--max-scene-memory",
+        ],
+    );
+    // 2^28 instances of the box, charged before any is read.
+    box_textured_fails(
+        |g| {
+            g["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+            g["accessors"].as_array_mut().unwrap().push(
+                json!({"bufferView": 1, "componentType": 5126, "count": 1 << 28, "type": "VEC3"}),
+            );
+            g["nodes"][2]["extensions"] =
+                json!({"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 4}}});
+        },
+        "nodes[2].extensions.EXT_mesh_gpu_instancing",
+        &[
+            "268435456 instances of meshes[0].primitives[0]: ",
+            "--max-scene-memory",
+        ],
+    );
+}
+
+#[test]
+fn camera_option_names_the_cameras_a_file_has() {
+    // BoxTextured places no camera: --camera 2 has none to pick.
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/BoxTextured/BoxTextured.gltf");
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = penumbra(&render_args(&data, out_dir.path(), &["--camera", "2"]), &[]);
+    let at = format!("{}: cameras: ", data.display());
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[
+            &at,
+            "--camera 2: no node of the default scene places cameras[2]",
+            "--camera framing",
+        ],
+    );
+    // A JSON scene has one camera.
+    let scene = scene_file("scene.json", mutated(|_| {}));
+    let out = penumbra(
+        &render_args(&scene.path, out_dir.path(), &["--camera", "framing"]),
+        &[],
+    );
+    let at = format!("{}: camera: ", scene.path.display());
+    assert_fails(
+        &out,
+        out_dir.path(),
+        &[],
+        Shape::OneLine,
+        &[&at, "--camera chooses among a glTF file's cameras"],
+    );
+}
+
+#[test]
 fn gltf_validation_errors_name_the_primitive_not_the_scene_object() {
     // Scaled by 1e20, the box lies beyond what the kernel's f32 holds; the
     // scene's validation finds it as objects[0].positions[0].

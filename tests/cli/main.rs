@@ -17,6 +17,7 @@ mod farm_batch;
 mod farm_slurm;
 mod farm_split;
 mod gltf_materials;
+mod gltf_render;
 mod json_textures;
 mod metrics;
 mod setup_script;

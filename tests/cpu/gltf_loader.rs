@@ -14,21 +14,21 @@ use serde_json::{json, Value};
 use tempfile::TempDir;
 
 /// A glTF document under construction: the JSON root and one binary buffer.
-struct Doc {
-    root: Value,
-    bin: Vec<u8>,
+pub(crate) struct Doc {
+    pub(crate) root: Value,
+    pub(crate) bin: Vec<u8>,
 }
 
 /// How the buffer is stored.
 #[derive(Clone, Copy, Debug)]
-enum Container {
+pub(crate) enum Container {
     Embedded,
     External,
     Glb,
 }
 
 impl Doc {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let root = json!({
             "asset": { "version": "2.0" },
             "scene": 0,
@@ -41,7 +41,7 @@ impl Doc {
         }
     }
 
-    fn push(&mut self, array: &str, item: Value) -> usize {
+    pub(crate) fn push(&mut self, array: &str, item: Value) -> usize {
         let list = self.root[array].as_array_mut();
         let list = match list {
             Some(list) => list,
@@ -55,7 +55,7 @@ impl Doc {
     }
 
     /// Appends bytes (4-aligned) as a new buffer view.
-    fn view(&mut self, bytes: &[u8]) -> usize {
+    pub(crate) fn view(&mut self, bytes: &[u8]) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -67,7 +67,7 @@ impl Doc {
         )
     }
 
-    fn vec3(&mut self, data: &[[f32; 3]]) -> usize {
+    pub(crate) fn vec3(&mut self, data: &[[f32; 3]]) -> usize {
         let bytes: Vec<u8> = data
             .iter()
             .flatten()
@@ -88,7 +88,7 @@ impl Doc {
         )
     }
 
-    fn indices_u16(&mut self, ix: &[u16]) -> usize {
+    pub(crate) fn indices_u16(&mut self, ix: &[u16]) -> usize {
         let bytes: Vec<u8> = ix.iter().flat_map(|x| x.to_le_bytes()).collect();
         let view = self.view(&bytes);
         self.push(
@@ -107,14 +107,14 @@ impl Doc {
     }
 
     /// A mesh of these primitives on a new root node with extra node fields.
-    fn mesh_node(&mut self, primitives: Value, node: Value) -> usize {
+    pub(crate) fn mesh_node(&mut self, primitives: Value, node: Value) -> usize {
         let mesh = self.push("meshes", json!({ "primitives": primitives }));
         let mut node = node;
         node["mesh"] = json!(mesh);
         self.root_node(node)
     }
 
-    fn root_node(&mut self, node: Value) -> usize {
+    pub(crate) fn root_node(&mut self, node: Value) -> usize {
         let n = self.push("nodes", node);
         self.root["scenes"][0]["nodes"]
             .as_array_mut()
@@ -124,7 +124,7 @@ impl Doc {
     }
 
     /// Writes the document into `dir` as `name` plus the extension.
-    fn write(&self, dir: &Path, name: &str, how: Container) -> PathBuf {
+    pub(crate) fn write(&self, dir: &Path, name: &str, how: Container) -> PathBuf {
         let mut root = self.root.clone();
         let len = self.bin.len();
         match how {
@@ -155,7 +155,7 @@ impl Doc {
     }
 }
 
-fn base64(bytes: &[u8]) -> String {
+pub(crate) fn base64(bytes: &[u8]) -> String {
     const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::new();
     for chunk in bytes.chunks(3) {
@@ -176,7 +176,7 @@ fn base64(bytes: &[u8]) -> String {
     out
 }
 
-fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+pub(crate) fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let pad = |data: &[u8], fill: u8| {
         let mut v = data.to_vec();
         while !v.len().is_multiple_of(4) {
@@ -201,7 +201,7 @@ fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     out
 }
 
-const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+pub(crate) const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
 /// One triangle on a root node with the given fields.
 fn triangle_doc(node: Value) -> Doc {
@@ -211,14 +211,14 @@ fn triangle_doc(node: Value) -> Doc {
     doc
 }
 
-fn read_doc(doc: &Doc, how: Container) -> (TempDir, GltfDocument) {
+pub(crate) fn read_doc(doc: &Doc, how: Container) -> (TempDir, GltfDocument) {
     let dir = TempDir::new().unwrap();
     let path = doc.write(dir.path(), "model", how);
     let read = gltf::read(&path).unwrap_or_else(|e| panic!("{e}"));
     (dir, read)
 }
 
-fn load_doc(doc: &Doc, opts: &LoadOptions) -> Loaded {
+pub(crate) fn load_doc(doc: &Doc, opts: &LoadOptions) -> Loaded {
     let dir = TempDir::new().unwrap();
     let path = doc.write(dir.path(), "model", Container::Glb);
     let loaded = gltf::load(&path, opts).unwrap_or_else(|e| panic!("{e}"));
@@ -227,7 +227,7 @@ fn load_doc(doc: &Doc, opts: &LoadOptions) -> Loaded {
 }
 
 /// The error for this document, checking that it names the file and `field`.
-fn error_of(doc: &Doc, how: Container, field: &str) -> SceneError {
+pub(crate) fn error_of(doc: &Doc, how: Container, field: &str) -> SceneError {
     let dir = TempDir::new().unwrap();
     let path = doc.write(dir.path(), "model", how);
     let err = gltf::read(&path).expect_err("expected an error");
@@ -246,7 +246,7 @@ fn assert_close(a: DVec3, b: DVec3, tol: f64) {
     assert!(close(a, b, tol), "{a} != {b}");
 }
 
-fn notes_with(notes: &[String], text: &str) -> usize {
+pub(crate) fn notes_with(notes: &[String], text: &str) -> usize {
     notes.iter().filter(|n| n.contains(text)).count()
 }
 
@@ -736,11 +736,12 @@ fn skins_morph_targets_and_animations_get_one_note() {
     }]);
     let (_dir, read) = read_doc(&doc, Container::Glb);
     assert_eq!(read.notes.len(), 1, "{:?}", read.notes);
-    assert!(
-        read.notes[0].ends_with("skins, morph targets and animations are not applied: static pose")
-    );
-    // The static pose: targets are not added.
-    assert_eq!(read.meshes[0].mesh.positions[1], DVec3::X);
+    assert!(read.notes[0].ends_with(
+        "skins and animations are not applied: static pose \
+         (morph targets with the file's static weights)"
+    ));
+    // The static pose: targets are added with the node's static weights.
+    assert_eq!(read.meshes[0].mesh.positions[1], DVec3::new(1.0, 0.0, 9.0));
 }
 
 #[test]
@@ -785,6 +786,7 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
             Shape::Mesh(m) => m.bounds().unwrap(),
             s => panic!("{s:?}"),
         };
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for k in 0..8 {
             let pick = |bit: usize, a: f64, b: f64| if k >> bit & 1 == 0 { a } else { b };
             let corner = DVec3::new(
@@ -798,15 +800,22 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
                 x > 0.0 && x < w && y > 0.0 && y < h,
                 "corner {corner} at ({x}, {y}) in {w}x{h}"
             );
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
         }
-        // Looking at the centre of the box, from (1, 0.6, 1.4).
-        let (x, y) = cam.project((lo + hi) * 0.5).unwrap();
+        // The box's projection is centred in the frame.
+        let (w, h) = (f64::from(cam.width), f64::from(cam.height));
         assert!(
-            (x - f64::from(cam.width) / 2.0).abs() < 1e-6
-                && (y - f64::from(cam.height) / 2.0).abs() < 1e-6
+            ((x0 + x1) / 2.0 - w / 2.0).abs() < 1e-3 * w,
+            "{x0}..{x1} in {w}"
         );
-        let from = (cam.position - (lo + hi) * 0.5).normalize();
-        assert_close(from, DVec3::new(1.0, 0.6, 1.4).normalize(), 1e-12);
+        assert!(
+            ((y0 + y1) / 2.0 - h / 2.0).abs() < 1e-3 * h,
+            "{y0}..{y1} in {h}"
+        );
+        // Looking from 30° right of the front (+Z) and 20° above it.
+        let (az, el) = (30f64.to_radians(), 20f64.to_radians());
+        let from = DVec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos());
+        assert_close(cam.orientation.col(2), from, 1e-12);
         check_default_lights(&loaded.scene);
     }
 }
@@ -1273,7 +1282,7 @@ use penumbra::loaders::guard::Guard;
 use penumbra::scene::{AlphaMode, Filter, Sampler, TextureRef, UvTransform, Wrap};
 
 /// A PNG of `w × h` texels, texel (x, y) = (x, y, 7, 200 + x).
-fn png(w: u32, h: u32) -> Vec<u8> {
+pub(crate) fn png(w: u32, h: u32) -> Vec<u8> {
     let img = image::RgbaImage::from_fn(w, h, |x, y| {
         image::Rgba([x as u8, y as u8, 7, 200u8.wrapping_add(x as u8)])
     });
@@ -1283,13 +1292,20 @@ fn png(w: u32, h: u32) -> Vec<u8> {
     out
 }
 
-fn png_uri(w: u32, h: u32) -> String {
+pub(crate) fn png_uri(w: u32, h: u32) -> String {
     format!("data:image/png;base64,{}", base64(&png(w, h)))
 }
 
 impl Doc {
     /// An accessor of `count` elements over these bytes.
-    fn accessor(&mut self, bytes: &[u8], ty: u32, count: usize, kind: &str, norm: bool) -> usize {
+    pub(crate) fn accessor(
+        &mut self,
+        bytes: &[u8],
+        ty: u32,
+        count: usize,
+        kind: &str,
+        norm: bool,
+    ) -> usize {
         let view = self.view(bytes);
         self.push(
             "accessors",
@@ -1298,13 +1314,13 @@ impl Doc {
         )
     }
 
-    fn floats(&mut self, data: &[f32], kind: &str, n: usize) -> usize {
+    pub(crate) fn floats(&mut self, data: &[f32], kind: &str, n: usize) -> usize {
         let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
         self.accessor(&bytes, 5126, data.len() / n, kind, false)
     }
 }
 
-const QUAD: [[f32; 3]; 4] = [
+pub(crate) const QUAD: [[f32; 3]; 4] = [
     [0.0, 0.0, 0.0],
     [1.0, 0.0, 0.0],
     [1.0, 1.0, 0.0],
@@ -1313,7 +1329,7 @@ const QUAD: [[f32; 3]; 4] = [
 
 /// A quad with normals and TEXCOORD_0 (float) on one primitive per
 /// material given.
-fn material_doc(materials: Value) -> Doc {
+pub(crate) fn material_doc(materials: Value) -> Doc {
     let mut doc = Doc::new();
     let pos = doc.vec3(&QUAD);
     let nrm = doc.vec3(&[[0.0, 0.0, 1.0]; 4]);

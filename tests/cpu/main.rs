@@ -8,6 +8,7 @@
 
 mod brdf;
 mod docs;
+mod gltf_extensions;
 mod gltf_loader;
 mod json_textures;
 mod kinds;

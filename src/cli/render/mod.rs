@@ -48,6 +48,10 @@ pub struct RenderArgs {
     /// Image height in pixels (overrides the scene's).
     #[arg(long, value_parser = side_parser())]
     height: Option<u32>,
+    /// A glTF file's camera: its index in `cameras`, its name, or `framing`
+    /// for the framing view (docs/gltf.md).
+    #[arg(long)]
+    camera: Option<String>,
     /// Vulkan device: an index from `penumbra devices`, or part of its name.
     #[arg(long)]
     device: Option<DeviceSelector>,
@@ -227,6 +231,9 @@ fn load(
     renderer: Option<&Renderer>,
 ) -> anyhow::Result<(Loaded, Duration)> {
     let mut options = args.limits.load_options(args.width, args.height);
+    if let Some(c) = &args.camera {
+        options.camera = loaders::gltf::CameraChoice::parse(c);
+    }
     if let Some(r) = renderer {
         options.max_triangles = r.max_triangles();
         options.max_texture_bytes = r.texture_capacity();
@@ -271,7 +278,7 @@ fn render_image(
     let write = t1.elapsed();
     println!(
         "{}",
-        summary::gpu_line(renderer, &frame, load, write, vector_width)
+        summary::gpu_line(renderer, &loaded.scene, &frame, load, write, vector_width)
     );
     Ok(())
 }

@@ -45,7 +45,11 @@ pub fn run(
                 ("render", s.timings.render),
                 ("write", write),
             ],
-            "",
+            &format!(
+                "{}{}",
+                summary::triangles_note(scene),
+                summary::texture_note(scene.textures.iter().map(|t| t.device_bytes()).sum())
+            ),
         )
     );
     Ok(())

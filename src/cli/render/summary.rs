@@ -88,6 +88,7 @@ pub fn render_with_progress(
 /// The summary line of a render on the device.
 pub fn gpu_line(
     renderer: &Renderer,
+    scene: &Scene,
     frame: &Frame,
     load: Duration,
     write: Duration,
@@ -116,17 +117,26 @@ pub fn gpu_line(
             ("readback", t.readback),
             ("write", write),
         ],
-        &format!("{width_note}{}", texture_note(s)),
+        &format!(
+            "{}{width_note}{}",
+            triangles_note(scene),
+            texture_note(s.texture_bytes)
+        ),
     )
 }
 
 /// ` | textures N MiB (mip-maps included)` for a scene with textures.
-fn texture_note(s: &RenderStats) -> String {
-    if s.texture_bytes == 0 {
+pub fn texture_note(bytes: u64) -> String {
+    if bytes == 0 {
         return String::new();
     }
     format!(
         " | textures {:.2} MiB (mip-maps included)",
-        s.texture_bytes as f64 / 1048576.0
+        bytes as f64 / 1048576.0
     )
+}
+
+/// ` | N triangles`: the scene's, glTF instances expanded (issue 39).
+pub fn triangles_note(scene: &Scene) -> String {
+    format!(" | {} triangles", scene.triangle_count())
 }

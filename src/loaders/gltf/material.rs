@@ -146,10 +146,16 @@ impl Reader<'_> {
                 if !scale.is_finite() {
                     return self.fail(format!("{field}.scale"), "must be finite");
                 }
-                let transform = self.raw_transform(m, &field)?;
+                let (transform, set) = self.raw_transform(m, &field)?;
                 let texture = self.texture(&n.texture(), false, &field)?;
-                let at = format!("{field}.texCoord");
-                let r = self.texture_ref(texture, n.tex_coord(), transform, &at)?;
+                let (tex_coord, at) = match set {
+                    Some(k) => (
+                        k,
+                        format!("{field}.extensions.KHR_texture_transform.texCoord"),
+                    ),
+                    None => (n.tex_coord(), format!("{field}.texCoord")),
+                };
+                let r = self.texture_ref(texture, tex_coord, transform, &at)?;
                 Some((r, scale))
             }
             None => None,
@@ -349,9 +355,9 @@ impl Reader<'_> {
     }
 
     /// KHR_texture_transform of `materials[m].normalTexture`, which the
-    /// `gltf` crate does not expose: read from the JSON itself. Its
-    /// `texCoord` is refused here, as it would silently differ otherwise.
-    fn raw_transform(&mut self, m: usize, field: &str) -> Result<UvTransform> {
+    /// `gltf` crate does not expose: read from the JSON itself, with its
+    /// `texCoord`, which overrides the normalTexture's.
+    fn raw_transform(&mut self, m: usize, field: &str) -> Result<(UvTransform, Option<u32>)> {
         if self.raw.is_none() {
             let value = serde_json::from_slice(self.json).unwrap_or(serde_json::Value::Null);
             self.raw = Some(value);
@@ -359,7 +365,7 @@ impl Reader<'_> {
         let raw = self.raw.as_ref().expect("parsed above");
         let ext = &raw["materials"][m]["normalTexture"]["extensions"]["KHR_texture_transform"];
         if ext.is_null() {
-            return Ok(UvTransform::default());
+            return Ok((UvTransform::default(), None));
         }
         let at = format!("{field}.extensions.KHR_texture_transform");
         let num = |v: &serde_json::Value, default: f64| match v {
@@ -374,12 +380,17 @@ impl Reader<'_> {
         let [ox, oy] = pair("offset", 0.0).ok_or_else(|| not_numbers("offset"))?;
         let [sx, sy] = pair("scale", 1.0).ok_or_else(|| not_numbers("scale"))?;
         let rotation = num(&ext["rotation"], 0.0).ok_or_else(|| not_numbers("rotation"))?;
-        if !ext["texCoord"].is_null() {
-            let message = "is not supported on normalTexture; set the normalTexture's texCoord";
-            return self.fail(format!("{at}.texCoord"), message);
-        }
+        let set = match &ext["texCoord"] {
+            serde_json::Value::Null => None,
+            v => match v.as_u64().and_then(|k| u32::try_from(k).ok()) {
+                Some(k) => Some(k),
+                None => return self.fail(format!("{at}.texCoord"), "must be an integer >= 0"),
+            },
+        };
         let parts = [ox, oy, rotation, sx, sy].map(|x| x as f32);
-        transform(&parts).map_err(|(key, message)| self.err(format!("{at}.{key}"), message))
+        let t =
+            transform(&parts).map_err(|(key, message)| self.err(format!("{at}.{key}"), message));
+        Ok((t?, set))
     }
 
     /// The texture `t` as a texture id (decoding its image in colour space
@@ -460,10 +471,12 @@ impl Reader<'_> {
             };
         let name = self.file.file_name().unwrap_or(self.file.as_os_str());
         let label = format!("{} {field}", name.to_string_lossy());
-        let mut texture = texture::decode(&bytes, mime, &label, srgb, self.guard)
-            .map_err(|e| self.err(at, e.0))?;
-        texture.file = file;
-        self.doc.textures.push(texture);
+        // Checked and charged now, decoded with the others after the walk
+        // (in parallel: module `decode`).
+        let pending = texture::prepare(bytes.into_owned(), mime, &label, srgb, self.guard)
+            .map_err(|e| self.err(&at, e.0))?;
+        self.pending.push((self.doc.textures.len(), pending, at));
+        self.doc.textures.push(super::decode::placeholder(file));
         Ok(self.doc.textures.len() - 1)
     }
 }

@@ -12,9 +12,17 @@
 //! and can panic on inconsistent files. Every range is checked before a byte is
 //! read, so no file content can make this module panic.
 
+mod cameras;
+mod decode;
+mod extensions;
 mod fields;
+pub mod framing;
 mod indices;
+mod instancing;
 mod material;
+mod meshopt;
+mod morph;
+mod quantization;
 mod tangents;
 
 use std::collections::HashMap;
@@ -29,6 +37,8 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::{Mode, Semantic};
 use gltf::scene::Transform;
 
+pub use self::cameras::{CameraChoice, PlacedCamera};
+use self::quantization::Attribute;
 use super::guard::Guard;
 use super::{LoadOptions, Loaded};
 use crate::loaders::GltfMaterials;
@@ -88,6 +98,8 @@ pub struct GltfDocument {
     pub meshes: Vec<GltfMesh>,
     /// The first camera instanced by a node of the default scene (depth-first order).
     pub camera: Option<GltfCamera>,
+    /// Every camera placed by a node of the default scene, in that order.
+    pub cameras: Vec<PlacedCamera>,
     /// The KHR_lights_punctual lights instanced in the default scene.
     pub lights: Vec<Light>,
     /// Notes for the user about parts of the file that are not used; one line each.
@@ -155,21 +167,35 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         });
     }
 
-    let (width, height) = image_size(opts, doc.camera.and_then(|c| c.aspect_ratio));
-    let camera = match doc.camera {
-        Some(c) => Camera {
-            position: c.position,
-            orientation: c.orientation,
-            projection: c.projection,
-            width,
-            height,
-        },
+    let chosen = cameras::choose(path, &opts.camera, &doc.cameras)?;
+    let (width, height) = image_size(opts, chosen.and_then(|c| c.camera.aspect_ratio));
+    let camera = match chosen {
+        Some(placed) => {
+            if placed.animated {
+                notes.push(format!(
+                    "{}: {} hangs under an animated node: using its static pose",
+                    path.display(),
+                    placed.label()
+                ));
+            }
+            let c = placed.camera;
+            Camera {
+                position: c.position,
+                orientation: c.orientation,
+                projection: c.projection,
+                width,
+                height,
+            }
+        }
         None => {
-            notes.push(format!(
-                "no camera in {}: using a framing camera",
-                path.display()
-            ));
-            framing_camera(path, &objects, width, height)?
+            notes.push(match doc.cameras.is_empty() {
+                true => format!("no camera in {}: using a framing camera", path.display()),
+                false => format!(
+                    "{}: --camera framing: using a framing camera",
+                    path.display()
+                ),
+            });
+            framing::camera(path, &objects, width, height)?
         }
     };
     let mut lights = doc.lights;
@@ -220,42 +246,6 @@ fn image_size(opts: &LoadOptions, aspect: Option<f64>) -> (u32, u32) {
     super::override_size(opts, w, h)
 }
 
-/// Looks at the centre of the meshes' bounding box from direction (1, 0.6, 1.4)
-/// with a 45° vertical field of view, far enough back that the bounding sphere
-/// fits the narrower field of view with a 10% margin.
-fn framing_camera(path: &Path, objects: &[Object], width: u32, height: u32) -> Result<Camera> {
-    let bounds = objects.iter().filter_map(|o| match &o.shape {
-        Shape::Mesh(m) => m.bounds(),
-        _ => None,
-    });
-    let (lo, hi) = bounds
-        .reduce(|(lo, hi), (l, h)| (lo.min(l), hi.max(h)))
-        .unwrap_or((DVec3::ZERO, DVec3::ZERO));
-    let centre = (lo + hi) * 0.5;
-    // A single point has no size; any distance frames it.
-    let half_diagonal = (hi - lo).length() * 0.5;
-    let radius = if half_diagonal > 0.0 {
-        half_diagonal
-    } else {
-        1.0
-    };
-    let vfov_deg = 45.0_f64;
-    let half_v = (vfov_deg * 0.5).to_radians();
-    let half_h = (half_v.tan() * f64::from(width) / f64::from(height)).atan();
-    let distance = 1.1 * radius / half_v.min(half_h).sin();
-    let position = centre + DVec3::new(1.0, 0.6, 1.4).normalize() * distance;
-    let orientation = Camera::look_at(position, centre, DVec3::Y)
-        .map_err(|e| SceneError::new(path, "", format!("cannot place a framing camera: {e:?}")))?;
-    let projection = Projection::Perspective { vfov_deg };
-    Ok(Camera {
-        position,
-        orientation,
-        projection,
-        width,
-        height,
-    })
-}
-
 /// The key and fill lights of [`default_lights`], in camera space (x right,
 /// y up, z back; the camera looks along −z): the directions they travel in
 /// and their intensities.
@@ -304,18 +294,26 @@ fn read_scene(path: &Path, guard: &Guard) -> Result<(GltfDocument, Option<usize>
         guard,
         document: &document,
         json,
-        raw: None,
+        // For what the `gltf` crate does not expose (extensions' objects).
+        raw: Some(serde_json::from_slice(json).unwrap_or(serde_json::Value::Null)),
         buffers: Vec::new(),
+        decoded: HashMap::new(),
         doc,
         flags: Flags::default(),
         at: String::new(),
         materials: Vec::new(),
         texture_ids: HashMap::new(),
+        pending: Vec::new(),
     };
     // The `gltf` crate's accessors unwrap what its validation should have
     // checked; should one still panic, it becomes an error naming the file
     // and the field being read rather than a crash.
-    let walked = crate::panics::catch(|| walk(&mut r, &document, blob));
+    let walked = crate::panics::catch(|| {
+        let (mut doc, scene) = walk(&mut r, &document, blob)?;
+        let pending = std::mem::take(&mut r.pending);
+        decode::images(&r, pending, &mut doc.textures)?;
+        Ok((doc, scene))
+    });
     match walked {
         Ok(result) => result,
         Err(panic) => Err(SceneError::new(
@@ -341,27 +339,52 @@ fn walk(
         return Ok((std::mem::replace(&mut r.doc, empty_document(path)), None));
     };
     r.flags.animated = document.animations().len() > 0;
+    r.flags.quantized = document
+        .extensions_used()
+        .any(|e| e == "KHR_mesh_quantization");
 
     let order = scene_nodes(&scene, document.nodes().len()).map_err(|node| {
         // glTF requires disjoint trees; this also stops cycles.
         let message = format!("is reached twice from scene {}", scene.index());
         r.err(format!("nodes[{node}]"), message)
     })?;
-    // Every instanced primitive is admitted to the budget before any is read.
+    // Every instanced primitive is admitted to the budget before any is
+    // read, once per node and per EXT_mesh_gpu_instancing instance.
     for (node, _) in &order {
         if let Some(mesh) = node.mesh() {
+            let instances = r.instance_count(node)?;
             for prim in mesh.primitives() {
                 let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-                r.charge(&prim, &field)?;
+                let times = instances.map_or(1, |n| n as u64);
+                r.charge(&prim, &field, times)
+                    .map_err(|e| match instances {
+                        Some(n) => r.err(
+                            format!("nodes[{}].extensions.{}", node.index(), instancing::NAME),
+                            format!("{n} instances of {field}: {}", e.message),
+                        ),
+                        None => e,
+                    })?;
             }
         }
     }
+    // Nodes an animation moves, and so everything under them.
+    let targets: std::collections::HashSet<usize> = document
+        .animations()
+        .flat_map(|a| {
+            a.channels()
+                .map(|c| c.target().node().index())
+                .collect::<Vec<_>>()
+        })
+        .collect();
     let mut worlds = Vec::with_capacity(order.len());
+    let mut moving = Vec::with_capacity(order.len());
     for (node, parent) in &order {
-        let parent = parent.map_or(DMat4::IDENTITY, |p| worlds[p]);
-        let world = parent * r.local_transform(node)?;
-        r.node(node, &world)?;
+        let parent_world = parent.map_or(DMat4::IDENTITY, |p| worlds[p]);
+        let world = parent_world * r.local_transform(node)?;
+        let animated = targets.contains(&node.index()) || parent.is_some_and(|p| moving[p]);
+        r.node(node, &world, animated)?;
         worlds.push(world);
+        moving.push(animated);
     }
 
     let (file, f, notes) = (path.display(), r.flags, &mut r.doc.notes);
@@ -372,7 +395,8 @@ fn walk(
         ));
     }
     if f.animated {
-        let note = "skins, morph targets and animations are not applied: static pose";
+        let note = "skins and animations are not applied: static pose \
+                    (morph targets with the file's static weights)";
         notes.push(format!("{file}: {note}"));
     }
     if f.metallic_roughness {
@@ -383,7 +407,7 @@ fn walk(
     }
     let mut ignored: Vec<&str> = Vec::new();
     for e in document.extensions_used() {
-        if !material::SUPPORTED_EXTENSIONS.contains(&e) && !ignored.contains(&e) {
+        if !extensions::supported(e) && !ignored.contains(&e) {
             ignored.push(e);
         }
     }
@@ -450,6 +474,7 @@ fn empty_document(path: &Path) -> GltfDocument {
     GltfDocument {
         meshes: vec![],
         camera: None,
+        cameras: vec![],
         lights: vec![],
         notes: vec![],
         files: vec![path.to_path_buf()],
@@ -509,13 +534,18 @@ fn parse_json(path: &Path, json: &[u8]) -> Result<gltf::Document> {
         }
     }
     let mut de = serde_json::Deserializer::from_slice(json);
-    let root: gltf::json::Root = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+    let mut root: gltf::json::Root = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let field = Some(e.path().to_string())
             .filter(|p| p != ".")
             .unwrap_or_default();
         invalid(field, e.inner())
     })?;
     de.end().map_err(|e| invalid(String::new(), &e))?;
+    // A required extension penumbra lacks explains whatever else fails.
+    if let Some((field, message)) = extensions::check_required(&root) {
+        return Err(SceneError::new(path, field, message));
+    }
+    extensions::hide_geometry(&mut root);
     // gltf-json 1.4.1's validation indexes `accessors` with each POSITION
     // before checking the index, so a dangling one would panic there.
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -582,6 +612,8 @@ fn gltf_path(path: &str) -> String {
 struct Flags {
     skipped: usize,
     animated: bool,
+    /// The file uses KHR_mesh_quantization: integer vertex attributes.
+    quantized: bool,
     metallic_roughness: bool,
     occlusion: bool,
     ranged: bool,
@@ -600,10 +632,16 @@ struct Reader<'a> {
     materials: Vec<Option<material::Material>>,
     /// The texture decoded from each (image, sRGB) pair.
     texture_ids: HashMap<(usize, bool), TextureId>,
+    /// Images checked and charged but not yet decoded: the texture they
+    /// become, and the field that names them.
+    pending: Vec<(TextureId, super::texture::Pending, String)>,
     /// The field being read, for an error should a dependency panic.
     at: String,
-    /// One per `buffers[i]`, exactly `byteLength` long.
+    /// One per `buffers[i]`, exactly `byteLength` long; empty for a
+    /// fallback buffer of EXT_meshopt_compression.
     buffers: Vec<Vec<u8>>,
+    /// The decoded bytes of each EXT_meshopt_compression bufferView.
+    decoded: HashMap<usize, Vec<u8>>,
     doc: GltfDocument,
     flags: Flags,
 }
@@ -623,6 +661,11 @@ impl Reader<'_> {
         let base = self.file.parent().unwrap_or(Path::new(""));
         for buffer in document.buffers() {
             let f = |k: &str| format!("buffers[{}]{k}", buffer.index());
+            if meshopt::is_fallback(&self.raw_json()["buffers"][buffer.index()]) {
+                // Data for readers without EXT_meshopt_compression only.
+                self.buffers.push(Vec::new());
+                continue;
+            }
             let mut data = match buffer.source() {
                 Source::Bin => match blob.take() {
                     Some(blob) => blob,
@@ -659,6 +702,45 @@ impl Reader<'_> {
             data.truncate(buffer.length());
             self.buffers.push(data);
         }
+        self.decode_meshopt(document)
+    }
+
+    /// The file's JSON as a value.
+    fn raw_json(&self) -> &serde_json::Value {
+        self.raw.as_ref().unwrap_or(&serde_json::Value::Null)
+    }
+
+    /// Decodes every EXT_meshopt_compression bufferView, each charged
+    /// against the memory budget by its declared size first.
+    fn decode_meshopt(&mut self, document: &gltf::Document) -> Result<()> {
+        for view in document.views() {
+            let i = view.index();
+            let at = format!("bufferViews[{i}].extensions.{}", meshopt::NAME);
+            let c = meshopt::parse(&self.raw_json()["bufferViews"][i], view.length())
+                .map_err(|(key, message)| self.err(format!("{at}.{key}"), message))?;
+            let Some(c) = c else { continue };
+            let Some(buffer) = self.buffers.get(c.buffer) else {
+                let message = format!("{} is not a buffer of the file", c.buffer);
+                return self.fail(format!("{at}.buffer"), message);
+            };
+            let end = c.offset.checked_add(c.length);
+            let Some(source) = end.and_then(|end| buffer.get(c.offset..end)) else {
+                let message = format!(
+                    "{} bytes from offset {} exceed buffers[{}] ({} bytes)",
+                    c.length,
+                    c.offset,
+                    c.buffer,
+                    buffer.len()
+                );
+                return self.fail(format!("{at}.byteLength"), message);
+            };
+            self.guard.charge_bytes(c.decoded_len()).map_err(|e| {
+                let what = format!("with this view's {} decoded bytes", c.decoded_len());
+                self.err(format!("{at}.count"), e.0.replace("with this image", &what))
+            })?;
+            let bytes = meshopt::decode(&c, source).map_err(|m| self.err(&at, m))?;
+            self.decoded.insert(i, bytes);
+        }
         Ok(())
     }
 
@@ -690,25 +772,44 @@ impl Reader<'_> {
     }
 
     /// Collects the node's meshes, camera and light.
-    fn node(&mut self, node: &gltf::Node, world: &DMat4) -> Result<()> {
+    fn node(&mut self, node: &gltf::Node, world: &DMat4, animated: bool) -> Result<()> {
         self.flags.animated |= node.skin().is_some();
         if let Some(mesh) = node.mesh() {
             let label = match node.name() {
                 Some(name) => format!("node '{name}' mesh {}", mesh.index()),
                 None => format!("node {} mesh {}", node.index(), mesh.index()),
             };
-            for prim in mesh.primitives() {
-                let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-                self.at.clone_from(&field);
-                let name = format!("{label} primitive {}", prim.index());
-                if let Some(m) = self.primitive(&prim, world, &field, name)? {
-                    self.doc.meshes.push(m);
+            self.at = format!("nodes[{}]", node.index());
+            let weights = morph::weights(node, &mesh);
+            let placed: Vec<(DMat4, String)> = match self.instances(node)? {
+                Some(instances) => instances
+                    .iter()
+                    .enumerate()
+                    .map(|(k, m)| (*world * *m, format!("{label} instance {k}")))
+                    .collect(),
+                None => vec![(*world, label)],
+            };
+            for (world, label) in &placed {
+                for prim in mesh.primitives() {
+                    let field = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+                    self.at.clone_from(&field);
+                    let name = format!("{label} primitive {}", prim.index());
+                    if let Some(m) = self.primitive(&prim, world, &weights, &field, name)? {
+                        self.doc.meshes.push(m);
+                    }
                 }
             }
         }
         self.at = format!("nodes[{}]", node.index());
-        if let (Some(camera), None) = (node.camera(), self.doc.camera) {
-            self.doc.camera = Some(self.camera(&camera, world, node.index())?);
+        if let Some(camera) = node.camera() {
+            let placed = self.camera(&camera, world, node.index())?;
+            self.doc.camera.get_or_insert(placed);
+            self.doc.cameras.push(PlacedCamera {
+                index: camera.index(),
+                name: camera.name().map(str::to_string),
+                camera: placed,
+                animated,
+            });
         }
         if let Some(light) = node.light() {
             let light = self.light(&light, world, node.index())?;
@@ -722,6 +823,7 @@ impl Reader<'_> {
         &mut self,
         prim: &gltf::Primitive,
         world: &DMat4,
+        weights: &[f64],
         field: &str,
         name: String,
     ) -> Result<Option<GltfMesh>> {
@@ -733,10 +835,9 @@ impl Reader<'_> {
             self.flags.skipped += 1;
             return Ok(None);
         }
-        self.flags.animated |= prim.morph_targets().len() > 0;
-        let positions = self.positions(prim, world, field)?;
+        let positions = self.positions(prim, world, weights, field)?;
         let normals = match prim.get(&Semantic::Normals) {
-            Some(acc) => self.normals(&acc, world, positions.len(), field)?,
+            Some(acc) => self.normals(prim, &acc, world, weights, positions.len(), field)?,
             None => None,
         };
         let indices = self.indices(prim, positions.len(), field)?;
@@ -767,7 +868,7 @@ impl Reader<'_> {
         let tangents = match (normal_set, prim.get(&Semantic::Tangents)) {
             (Some(_), Some(acc)) => {
                 let field = format!("{field}.attributes.TANGENT");
-                let raw = self.read_accessor(&acc, &field, Dimensions::Vec4, &[DataType::F32])?;
+                let raw = self.attribute(&acc, &field, Dimensions::Vec4, Attribute::Tangent)?;
                 self.check_attribute(&acc, &raw, 4, n, &field)?;
                 let m = DMat3::from_mat4(*world);
                 Some(tangents::from_attribute(&raw, m, normals.as_deref()))
@@ -820,7 +921,8 @@ impl Reader<'_> {
                 continue;
             };
             let field = format!("{field}.attributes.TEXCOORD_{k}");
-            let raw = self.unit_attribute(&acc, &field, Dimensions::Vec2, count)?;
+            let raw = self.attribute(&acc, &field, Dimensions::Vec2, Attribute::TexCoord)?;
+            self.check_attribute(&acc, &raw, 2, count, &field)?;
             sets.push(Some(raw.chunks_exact(2).map(DVec2::from_slice).collect()));
         }
         while sets.last().is_some_and(Option::is_none) {
@@ -910,7 +1012,7 @@ impl Reader<'_> {
     /// Admits a triangle primitive to the scene's memory budget and triangle
     /// limit before any of its data is read; an instanced mesh is charged
     /// once per instance. Points and lines are skipped, so cost nothing.
-    fn charge(&self, prim: &gltf::Primitive, field: &str) -> Result<()> {
+    fn charge(&self, prim: &gltf::Primitive, field: &str, times: u64) -> Result<()> {
         let mode = prim.mode();
         if !matches!(
             mode,
@@ -925,6 +1027,8 @@ impl Reader<'_> {
             Mode::Triangles => indices / 3,
             _ => indices.saturating_sub(2),
         };
+        let [vertices, indices, triangles] =
+            [vertices, indices, triangles].map(|x| x.saturating_mul(times));
         self.guard
             .charge(vertices, normals, indices, triangles)
             .map_err(|e| self.err(field, e.0))?;
@@ -947,6 +1051,7 @@ impl Reader<'_> {
                 None => triangles.saturating_mul(3 * (16 + 128)),
             });
         }
+        let bytes = bytes.saturating_mul(times);
         if bytes == 0 {
             return Ok(());
         }
@@ -957,12 +1062,19 @@ impl Reader<'_> {
     }
 
     /// World-space positions, all finite.
-    fn positions(&self, prim: &gltf::Primitive, world: &DMat4, field: &str) -> Result<Vec<DVec3>> {
-        let field = format!("{field}.attributes.POSITION");
+    fn positions(
+        &self,
+        prim: &gltf::Primitive,
+        world: &DMat4,
+        weights: &[f64],
+        at: &str,
+    ) -> Result<Vec<DVec3>> {
+        let field = format!("{at}.attributes.POSITION");
         let Some(acc) = prim.get(&Semantic::Positions) else {
             return self.fail(field, "is missing");
         };
-        let raw = self.read_accessor(&acc, &field, Dimensions::Vec3, &[DataType::F32])?;
+        let mut raw = self.attribute(&acc, &field, Dimensions::Vec3, Attribute::Position)?;
+        self.morph(prim, weights, &mut raw, false, at)?;
         let mut positions = Vec::with_capacity(raw.len() / 3);
         for (i, p) in raw.chunks_exact(3).enumerate() {
             let p = world.transform_point3(DVec3::from_slice(p));
@@ -1005,19 +1117,22 @@ impl Reader<'_> {
     /// they stay perpendicular to the surface under non-uniform scale.
     fn normals(
         &self,
+        prim: &gltf::Primitive,
         acc: &Accessor,
         world: &DMat4,
+        weights: &[f64],
         count: usize,
-        field: &str,
+        at: &str,
     ) -> Result<Option<Vec<DVec3>>> {
-        let field = format!("{field}.attributes.NORMAL");
-        let raw = self.read_accessor(acc, &field, Dimensions::Vec3, &[DataType::F32])?;
+        let field = format!("{at}.attributes.NORMAL");
+        let mut raw = self.attribute(acc, &field, Dimensions::Vec3, Attribute::Normal)?;
         if raw.len() != count * 3 {
             return self.fail(
                 field,
                 format!("has {} normals for {count} vertices", raw.len() / 3),
             );
         }
+        self.morph(prim, weights, &mut raw, true, at)?;
         let linear = DMat3::from_mat4(*world);
         if linear.determinant() == 0.0 {
             // A node scaled to nothing (a common way to hide one) leaves only
@@ -1038,6 +1153,39 @@ impl Reader<'_> {
             normals.push(n);
         }
         Ok(Some(normals))
+    }
+
+    /// A vertex attribute's accessor of shape `dims` as numbers, of one of
+    /// the component types glTF allows for `attribute` (with
+    /// KHR_mesh_quantization's where the file uses it), dequantized.
+    fn attribute(
+        &self,
+        acc: &Accessor,
+        field: &str,
+        dims: Dimensions,
+        attribute: Attribute,
+    ) -> Result<Vec<f64>> {
+        let allowed = quantization::allowed(attribute, self.flags.quantized);
+        let ty = acc.data_type();
+        let this = (ty, acc.normalized() && ty != DataType::F32);
+        if acc.dimensions() == dims && !allowed.contains(&this) {
+            let names: Vec<String> = allowed.iter().map(|&t| quantization::name(t)).collect();
+            let mut message = format!(
+                "accessors[{}] is {}, expected {}",
+                acc.index(),
+                quantization::name(this),
+                names.join(", ")
+            );
+            if !self.flags.quantized && quantization::allowed(attribute, true).contains(&this) {
+                message +=
+                    " (KHR_mesh_quantization allows it, but the file does not use that extension)";
+            }
+            return self.fail(field, message);
+        }
+        let types: Vec<DataType> = allowed.iter().map(|t| t.0).collect();
+        let mut raw = self.read_accessor(acc, field, dims, &types)?;
+        quantization::dequantize(&mut raw, this.0, this.1);
+        Ok(raw)
     }
 
     /// An accessor of the expected shape as `count × components` numbers, with
@@ -1141,7 +1289,19 @@ impl Reader<'_> {
 
     /// The bytes of a buffer view (an image's), checked to lie in its buffer.
     fn view_bytes(&self, view: &View) -> Result<&[u8]> {
-        let buffer = &self.buffers[view.buffer().index()];
+        if let Some(bytes) = self.decoded.get(&view.index()) {
+            return Ok(bytes);
+        }
+        let b = view.buffer().index();
+        if meshopt::is_fallback(&self.raw_json()["buffers"][b]) {
+            let message = format!(
+                "lies in buffers[{b}], a fallback buffer of {} whose data penumbra does not read, \
+                 but the view is not compressed",
+                meshopt::NAME
+            );
+            return self.fail(format!("bufferViews[{}]", view.index()), message);
+        }
+        let buffer = &self.buffers[b];
         let end = view.offset().checked_add(view.length());
         end.and_then(|end| buffer.get(view.offset()..end))
             .ok_or_else(|| {

@@ -4,6 +4,7 @@
 //! object's surface maps, and each triangle's vertex attributes.
 
 use glam::{DVec3, Vec4};
+use rayon::prelude::*;
 
 use crate::scene::texture::{AlphaMode, Filter, Sampler, TextureRef, Wrap};
 use crate::scene::{Scene, Shape};
@@ -92,6 +93,14 @@ pub fn texture_words(t: &crate::scene::Texture) -> (Vec<u32>, u32) {
 /// returns its number of levels; no level is held beyond the one it is
 /// made from ([`crate::scene::Texture::for_each_mip_level`]).
 fn push_texture_words(t: &crate::scene::Texture, words: &mut Vec<u32>) -> u32 {
+    let start = words.len();
+    words.resize(start + (t.device_bytes() / 4) as usize, 0);
+    fill_texture_words(t, &mut words[start..])
+}
+
+/// Writes [`texture_words`] of `t` into `out`, exactly its length
+/// (`device_bytes / 4` words), and returns its number of levels.
+fn fill_texture_words(t: &crate::scene::Texture, out: &mut [u32]) -> u32 {
     let lut: [u32; 256] = std::array::from_fn(|b| {
         if t.srgb {
             (crate::scene::texture::srgb_to_linear(b as u8) * 65535.0).round() as u32
@@ -100,15 +109,26 @@ fn push_texture_words(t: &crate::scene::Texture, words: &mut Vec<u32>) -> u32 {
         }
     });
     let mut levels = 0;
+    let mut at = 0;
     t.for_each_mip_level(|_, _, texels| {
         levels += 1;
-        for p in texels {
-            words.push(lut[p[0] as usize] | lut[p[1] as usize] << 16);
-            words.push(lut[p[2] as usize] | (u32::from(p[3]) * 257) << 16);
-        }
+        let level = &mut out[at..at + 2 * texels.len()];
+        at += level.len();
+        level
+            .par_chunks_mut(2 * PARALLEL_TEXELS)
+            .zip(texels.par_chunks(PARALLEL_TEXELS))
+            .for_each(|(words, texels)| {
+                for (w, p) in words.chunks_exact_mut(2).zip(texels) {
+                    w[0] = lut[p[0] as usize] | lut[p[1] as usize] << 16;
+                    w[1] = lut[p[2] as usize] | (u32::from(p[3]) * 257) << 16;
+                }
+            });
     });
     levels
 }
+
+/// Texels per piece of work handed to rayon when a level is packed.
+const PARALLEL_TEXELS: usize = 1 << 16;
 
 fn wrap_bits(w: Wrap) -> u32 {
     match w {
@@ -175,25 +195,45 @@ impl GpuTextures {
             .iter()
             .map(|t| (t.device_bytes() / 4).next_multiple_of(4))
             .sum();
-        let mut words: Vec<u32> = Vec::with_capacity(capacity as usize);
-        let mut chains = Vec::with_capacity(scene.textures.len());
+        let mut words: Vec<u32> = vec![0; capacity as usize];
+        // Each chain starts a texel, so one texture's texels can be
+        // rewritten without touching another's ([`texture_words`]).
+        let mut bases = Vec::with_capacity(scene.textures.len());
+        let mut end = 0;
         for t in &scene.textures {
-            // Each chain starts a texel, so one texture's texels can be
-            // rewritten without touching another's ([`texture_words`]).
-            words.resize(words.len().next_multiple_of(4), 0);
-            let base = words.len();
-            let levels = push_texture_words(t, &mut words);
+            let base = end;
+            end = (base + (t.device_bytes() / 4) as usize).next_multiple_of(4);
+            bases.push(base);
+        }
+        words.truncate(end);
+        // The chains are made in parallel (issue 39), each into its own
+        // part of the one buffer.
+        let mut parts: Vec<&mut [u32]> = Vec::with_capacity(scene.textures.len());
+        let mut rest = &mut words[..];
+        for (t, &base) in scene.textures.iter().zip(&bases) {
+            let done = end - rest.len();
+            let (_, tail) = rest.split_at_mut(base - done);
+            let (part, tail) = tail.split_at_mut((t.device_bytes() / 4) as usize);
+            parts.push(part);
+            rest = tail;
+        }
+        let levels: Vec<u32> = parts
+            .into_par_iter()
+            .zip(scene.textures.par_iter())
+            .map(|(part, t)| fill_texture_words(t, part))
+            .collect();
+        let mut chains = Vec::with_capacity(scene.textures.len());
+        for ((t, &base), levels) in scene.textures.iter().zip(&bases).zip(levels) {
             chains.push((base as u32, levels));
             g.chains.push(TextureChain {
                 first_texel: (base / 4) as u64,
-                words: words.len() - base,
+                words: (t.device_bytes() / 4) as usize,
                 width: t.width,
                 height: t.height,
                 srgb: t.srgb,
             });
         }
         g.texture_bytes = g.chains.iter().map(|c| c.words as u64 * 4).sum();
-        words.resize(words.len().next_multiple_of(4), 0);
         // Four words a texel, the same buffer when its capacity allows.
         g.texels = bytemuck::allocation::try_cast_vec(words).unwrap_or_else(|(_, words)| {
             words

@@ -1,0 +1,84 @@
+//! `penumbra render` of glTF files (issue 39): the summary line states the
+//! triangle count, EXT_mesh_gpu_instancing's instances expanded, and the
+//! texture memory.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::{json, Value};
+
+/// Standard base64 with padding, for a data: URI.
+fn base64(bytes: &[u8]) -> String {
+    const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for k in 0..4 {
+            match k <= chunk.len() {
+                true => out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char),
+                false => out.push('='),
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/BoxTextured/BoxTextured.gltf");
+    let mut gltf: Value = serde_json::from_slice(&std::fs::read(data).unwrap()).unwrap();
+    // The box (12 triangles) drawn 3 times, side by side.
+    let offsets: Vec<u8> = [[0f32, 0.0, 0.0], [2.0, 0.0, 0.0], [4.0, 0.0, 0.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&offsets));
+    gltf["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "byteLength": 36, "uri": uri }));
+    gltf["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "buffer": 1, "byteLength": 36 }));
+    let view = gltf["bufferViews"].as_array().unwrap().len() - 1;
+    gltf["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "bufferView": view, "componentType": 5126, "count": 3, "type": "VEC3" }));
+    let acc = gltf["accessors"].as_array().unwrap().len() - 1;
+    gltf["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    gltf["nodes"][2]["extensions"] =
+        json!({ "EXT_mesh_gpu_instancing": { "attributes": { "TRANSLATION": acc } } });
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("boxes.gltf");
+    std::fs::write(&scene, serde_json::to_vec(&gltf).unwrap()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render".as_ref(), scene.as_os_str(), "-o".as_ref()])
+        .arg(dir.path().join("out.png"))
+        .args(["--width", "48", "--height", "36"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find(|l| l.contains(" Mrays/s"))
+        .expect("summary");
+    assert!(line.contains(" | 36 triangles"), "{line}");
+    assert!(
+        line.contains(" | textures ") && line.contains(" MiB (mip-maps included)"),
+        "{line}"
+    );
+}
