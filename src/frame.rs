@@ -101,6 +101,11 @@ pub struct Frame {
     /// the frame (engine stages by name, `shade <file>`), each dispatch
     /// submitted and timed on its own; empty otherwise.
     pub stage_times: Vec<(String, Duration)>,
+    /// The driver's compile of each pipeline this render built (engine
+    /// stages by name, `shade <file>`), at its first dispatch; empty when
+    /// every pipeline came from the cache. Their sum is
+    /// `stats.timings.driver_compile`.
+    pub driver_compiles: Vec<(String, Duration)>,
 }
 
 /// Most samples per pixel.

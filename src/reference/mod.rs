@@ -339,6 +339,7 @@ pub fn render(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> Frame {
     let pixels = sum.iter().map(|p| p.map(|c| (c * inv) as f32)).collect();
     Frame {
         stage_times: Vec::new(),
+        driver_compiles: Vec::new(),
         image: Image {
             width,
             height,

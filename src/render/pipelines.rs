@@ -30,6 +30,8 @@ pub(super) struct Compiled {
     pub(super) pipeline: Duration,
     pub(super) driver: Duration,
     pub(super) names: Vec<String>,
+    /// Each pipeline's driver compile (its first dispatch), by name.
+    pub(super) driver_each: Vec<(String, Duration)>,
 }
 
 impl Compiled {
@@ -38,6 +40,7 @@ impl Compiled {
         self.pipeline += other.pipeline;
         self.driver += other.driver;
         self.names.extend(other.names);
+        self.driver_each.extend(other.driver_each);
     }
 }
 
@@ -162,6 +165,7 @@ impl Renderer {
             pipeline: creation,
             driver,
             names: vec![stage.name().to_string()],
+            driver_each: vec![(stage.name().to_string(), driver)],
         })
     }
 
@@ -217,6 +221,7 @@ impl Renderer {
             pipeline: creation,
             driver,
             names: vec![format!("shade {}", program.file.label_in(&self.shaders))],
+            driver_each: vec![(format!("shade {}", program.file.label()), driver)],
         })
     }
 

@@ -64,6 +64,7 @@ impl Renderer {
         Ok(Rendered {
             frame: Frame {
                 stage_times,
+                driver_compiles: plan.compiled.driver_each.clone(),
                 image: Image {
                     width,
                     height: rows.end - rows.start,

@@ -82,3 +82,64 @@ fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
         "{line}"
     );
 }
+
+/// The summary line names each pipeline the render built with the driver's
+/// compile time, and those times add up to the phase's total (each printed
+/// to 0.1 ms).
+#[test]
+fn the_summary_line_reports_the_driver_compile_of_each_pipeline() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textured.json");
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render".as_ref(), scene.as_os_str(), "-o".as_ref()])
+        .arg(dir.path().join("out.png"))
+        .args(["--width", "48", "--height", "36"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find(|l| l.contains(" Mrays/s"))
+        .expect("summary");
+    let ms = |s: &str| -> f64 { s.trim().trim_end_matches(" ms").parse().unwrap() };
+    let total = ms(line
+        .split("driver compile ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .expect("the phase"));
+    let each = line
+        .split(" | driver compile: ")
+        .nth(1)
+        .expect("per pipeline");
+    let parts: Vec<(&str, f64)> = each
+        .split(", ")
+        .map(|p| {
+            // "NAME 12.3 ms"
+            let rest = p.strip_suffix(" ms").expect("a time in ms");
+            let (name, t) = rest.rsplit_once(' ').expect("a name and a time");
+            (name, ms(t))
+        })
+        .collect();
+    let names: Vec<&str> = parts.iter().map(|(n, _)| *n).collect();
+    // The hit stage and one shade pipeline per shading file of the scene:
+    // painted.wgsl, Blinn-Phong and Phong.
+    assert!(names.contains(&"hit"), "{line}");
+    for file in ["painted.wgsl", "blinn_phong.wgsl", "phong.wgsl"] {
+        assert!(
+            names
+                .iter()
+                .any(|n| n.starts_with("shade ") && n.ends_with(file)),
+            "{file}: {line}"
+        );
+    }
+    let sum: f64 = parts.iter().map(|(_, t)| t).sum();
+    assert!(
+        (sum - total).abs() <= 0.05 * (parts.len() + 1) as f64,
+        "{sum} vs {total}: {line}"
+    );
+}

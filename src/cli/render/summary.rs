@@ -118,11 +118,27 @@ pub fn gpu_line(
             ("write", write),
         ],
         &format!(
-            "{}{width_note}{}",
+            "{}{width_note}{}{}",
             triangles_note(scene),
-            texture_note(s.texture_bytes)
+            texture_note(s.texture_bytes),
+            driver_compiles_note(&frame.driver_compiles)
         ),
     )
+}
+
+/// ` | driver compile: hit 120.3 ms, shade shading/phong.wgsl 80.1 ms`:
+/// each pipeline the render built, with the driver's compile at its first
+/// dispatch (issue 39: a textured scene's compile is a cost of its own);
+/// empty when every pipeline came from the cache.
+pub fn driver_compiles_note(compiles: &[(String, Duration)]) -> String {
+    if compiles.is_empty() {
+        return String::new();
+    }
+    let each: Vec<String> = compiles
+        .iter()
+        .map(|(name, d)| format!("{name} {}", ms(*d)))
+        .collect();
+    format!(" | driver compile: {}", each.join(", "))
 }
 
 /// ` | textures N MiB (mip-maps included)` for a scene with textures.
