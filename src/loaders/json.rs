@@ -889,67 +889,87 @@ impl Reader<'_> {
                 return Err(self.err(f(k), format!("not a field of {kind}")));
             }
         }
-        if pbr {
-            return self.metallic_roughness(&at, s, base, guard, textures);
-        }
-        if sg {
-            return self.specular_glossiness(&at, s, base, guard, textures);
-        }
         if s.params.is_some() && !wgsl {
             return Err(self.err(f("params"), format!("not a field of {kind}")));
         }
-        if wgsl {
-            return Ok(Shader::Wgsl(
+        // One exhaustive match: a new kind must say how it is read.
+        match s.kind {
+            ShaderKind::MetallicRoughness => self.metallic_roughness(&at, s, base, guard, textures),
+            ShaderKind::SpecularGlossiness => {
+                self.specular_glossiness(&at, s, base, guard, textures)
+            }
+            ShaderKind::Wgsl => Ok(Shader::Wgsl(
                 self.wgsl(&at, s, base, guard, read, textures)?,
+            )),
+            ShaderKind::Phong | ShaderKind::BlinnPhong => self.phong(&at, s, base, guard, textures),
+            ShaderKind::Checker => self.checker(&at, s, ids),
+        }
+    }
+
+    /// A `phong` or `blinn_phong` shader at `at`: colours or textures,
+    /// shininess.
+    fn phong(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        base: &Path,
+        guard: &super::guard::Guard,
+        textures: &mut Textures,
+    ) -> Result<Shader, SceneError> {
+        let f = |k: &str| format!("{at}.{k}");
+        let shininess = s.shininess.unwrap_or(1.0);
+        if !(shininess >= 0.0 && shininess.is_finite()) {
+            return Err(self.err(
+                f("shininess"),
+                format!("must be finite and >= 0, got {shininess}"),
             ));
         }
-        Ok(if phong {
-            let shininess = s.shininess.unwrap_or(1.0);
-            if !(shininess >= 0.0 && shininess.is_finite()) {
-                return Err(self.err(
-                    f("shininess"),
-                    format!("must be finite and >= 0, got {shininess}"),
-                ));
-            }
-            let mut colour = |k: &str, v: &Option<serde_json::Value>| {
-                self.colour_or_texture(&f(k), v.as_ref(), [0.0; 3], base, guard, textures)
-            };
-            let (ambient, ambient_t) = colour("ambient", &s.ambient)?;
-            let (diffuse, diffuse_t) = colour("diffuse", &s.diffuse)?;
-            let (specular, specular_t) = colour("specular", &s.specular)?;
-            let p = Phong {
-                textures: PhongTextures {
-                    ambient: ambient_t,
-                    diffuse: diffuse_t,
-                    specular: specular_t,
-                },
-                ambient,
-                diffuse,
-                specular,
-                shininess,
-            };
-            if s.kind == ShaderKind::Phong {
-                Shader::Phong(p)
-            } else {
-                Shader::BlinnPhong(p)
-            }
-        } else {
-            let size = s.size.unwrap_or_default();
-            if !(size > 0.0 && size.is_finite()) {
-                return Err(self.err(f("size"), format!("must be positive, got {size}")));
-            }
-            let sub = |k: &str, v: &Option<String>| {
-                let v = v.as_deref().unwrap_or_default();
-                ids.get(v)
-                    .copied()
-                    .ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
-            };
-            Shader::Checker(Checker {
-                size,
-                even: sub("even", &s.even)?,
-                odd: sub("odd", &s.odd)?,
-            })
+        let mut colour = |k: &str, v: &Option<serde_json::Value>| {
+            self.colour_or_texture(&f(k), v.as_ref(), [0.0; 3], base, guard, textures)
+        };
+        let (ambient, ambient_t) = colour("ambient", &s.ambient)?;
+        let (diffuse, diffuse_t) = colour("diffuse", &s.diffuse)?;
+        let (specular, specular_t) = colour("specular", &s.specular)?;
+        let p = Phong {
+            textures: PhongTextures {
+                ambient: ambient_t,
+                diffuse: diffuse_t,
+                specular: specular_t,
+            },
+            ambient,
+            diffuse,
+            specular,
+            shininess,
+        };
+        Ok(match s.kind {
+            ShaderKind::BlinnPhong => Shader::BlinnPhong(p),
+            _ => Shader::Phong(p),
         })
+    }
+
+    /// A `checker` shader at `at`: its size and its two sub-shaders by name.
+    fn checker(
+        &self,
+        at: &str,
+        s: &ShaderFile,
+        ids: &BTreeMap<String, ShaderId>,
+    ) -> Result<Shader, SceneError> {
+        let f = |k: &str| format!("{at}.{k}");
+        let size = s.size.unwrap_or_default();
+        if !(size > 0.0 && size.is_finite()) {
+            return Err(self.err(f("size"), format!("must be positive, got {size}")));
+        }
+        let sub = |k: &str, v: &Option<String>| {
+            let v = v.as_deref().unwrap_or_default();
+            ids.get(v)
+                .copied()
+                .ok_or_else(|| self.err(f(k), format!("no shader named \"{v}\"")))
+        };
+        Ok(Shader::Checker(Checker {
+            size,
+            even: sub("even", &s.even)?,
+            odd: sub("odd", &s.odd)?,
+        }))
     }
 
     /// A `specular_glossiness` shader at `at`: the extension's defaults

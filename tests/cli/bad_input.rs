@@ -549,6 +549,8 @@ field_cases! {
         => "shaders.red.base_colour", ["non-negative"];
     shininess_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "shininess": 3})
         => "shaders.red.shininess", ["not a field of a metallic_roughness shader"];
+    params_of_metallic_roughness: |v| v["shaders"]["red"] = json!({"type": "metallic_roughness", "params": {"x": 1}})
+        => "shaders.red.params", ["not a field of a metallic_roughness shader"];
     roughness_of_phong: |v| v["shaders"]["red"]["roughness"] = json!(0.5)
         => "shaders.red.roughness", ["not a field of a phong shader"];
     glossiness_above_one: |v| v["shaders"]["red"] = json!({"type": "specular_glossiness", "glossiness": 2})
