@@ -1,4 +1,5 @@
-// Directional, point and spot lights, and area lights (rectangle, sphere).
+// Directional, point and spot lights, area lights (rectangle, sphere) and
+// the environment (docs/materials.md, "Environment").
 // A light has an intensity and ambient, diffuse and specular colours; the
 // shade stage hands a shader the intensity times the falloff
 // (shaders/shading/interface.wgsl: LightSample), and the ambient colour
@@ -13,16 +14,19 @@ const LIGHT_POINT: u32 = 1u;
 const LIGHT_SPOT: u32 = 2u;
 const LIGHT_RECT: u32 = 3u;
 const LIGHT_SPHERE: u32 = 4u;
+// Sampled before the area kinds (which are every kind >= LIGHT_RECT).
+const LIGHT_ENVIRONMENT: u32 = 5u;
 
 // Mirrored by render::layout::Light.
 struct Light {
     // Point and spot: position; rectangle: corner; sphere: centre.
     position: vec3<f32>,
     kind: u32,
-    // Direction the light travels (directional), the cone axis (spot), or
-    // the emitting side's unit normal (rectangle).
+    // Direction the light travels (directional), the cone axis (spot),
+    // the emitting side's unit normal (rectangle), or up (environment).
     direction: vec3<f32>,
     // KHR_lights_punctual cone: attenuation = clamp(cos * scale + offset, 0, 1)^2.
+    // Environment: the gradient g(u) = cone_offset + cone_scale * u.
     cone_scale: f32,
     ambient: vec3<f32>,
     cone_offset: f32,
@@ -86,6 +90,18 @@ fn light_sample_count(light: Light) -> u32 {
 fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> SampledLight {
     if HAS_DIRECTIONAL && light.kind == LIGHT_DIRECTIONAL {
         return SampledLight(-light.direction, FAR, 1.0);
+    }
+    if HAS_AREA_LIGHTS && light.kind == LIGHT_ENVIRONMENT {
+        // Uniform on the sphere of directions (pdf 1/(4π)): radiance
+        // g(ω·up) over the pdf, 1/N of it per sample. Distance 0: no shadow
+        // ray, the environment is evaluated without visibility
+        // (docs/materials.md, "Environment").
+        let z = 1.0 - 2.0 * uv.x;
+        let r = sqrt(max(0.0, 1.0 - z * z));
+        let phi = 6.283185307 * uv.y;
+        let w = vec3<f32>(r * cos(phi), r * sin(phi), z);
+        let g = light.cone_offset + light.cone_scale * dot(w, light.direction);
+        return SampledLight(w, 0.0, 12.566370614 * g / f32(light.samples));
     }
     if HAS_AREA_LIGHTS && light.kind >= LIGHT_RECT {
         var x: vec3<f32>;

@@ -154,6 +154,7 @@ enum LightType {
     Spot,
     Rect,
     Sphere,
+    Environment,
 }
 
 #[derive(Deserialize)]
@@ -170,6 +171,7 @@ struct LightFile {
     edge2: Option<V3>,
     center: Option<V3>,
     radius: Option<f64>,
+    up: Option<V3>,
     samples: Option<u32>,
     intensity: Option<f32>,
     ambient: Option<C3>,
@@ -1130,6 +1132,7 @@ impl Reader<'_> {
             edge2,
             center,
             radius,
+            up,
             samples,
             intensity,
             ambient,
@@ -1152,6 +1155,7 @@ impl Reader<'_> {
             LightType::Spot => ("a spot light", true, true, true, false, false, false),
             LightType::Rect => ("a rect light", false, false, false, true, false, true),
             LightType::Sphere => ("a sphere light", false, false, false, false, true, true),
+            LightType::Environment => ("an environment", false, false, false, false, false, true),
         };
         fields_for(
             self.file,
@@ -1172,6 +1176,11 @@ impl Reader<'_> {
         // Optional for an area light, not a field of the others.
         if samples.is_some() && !area {
             return Err(self.err(f("samples"), format!("not a field of {kind_name}")));
+        }
+        // Optional for the environment (default +y), not a field of the others.
+        let environment = *light_type == LightType::Environment;
+        if up.is_some() && !environment {
+            return Err(self.err(f("up"), format!("not a field of {kind_name}")));
         }
         let sample_count = || {
             let n = samples.unwrap_or(DEFAULT_LIGHT_SAMPLES);
@@ -1235,6 +1244,11 @@ impl Reader<'_> {
                     samples: sample_count()?,
                 }
             }
+            LightType::Environment => LightKind::Environment {
+                up: self.direction(&f("up"), up.unwrap_or([0.0, 1.0, 0.0]))?,
+                samples: samples
+                    .map_or(Ok(crate::scene::ENVIRONMENT_SAMPLES), |_| sample_count())?,
+            },
         };
         let intensity = intensity.unwrap_or(1.0);
         if !(intensity >= 0.0 && intensity.is_finite()) {

@@ -40,6 +40,8 @@ pub enum Kind {
     },
     /// Sphere of point lights (uniform on the surface; not an occluder).
     Sphere { center: DVec3, radius: f64 },
+    /// Environment: radiance `g(ω·up)` (times the colours), `g(u) = a + b·u`.
+    Environment { up: DVec3, a: f64, b: f64 },
 }
 
 /// A light ready for shading.
@@ -101,6 +103,11 @@ impl Light {
                 samples = n;
                 Kind::Sphere { center, radius }
             }
+            LightKind::Environment { up, samples: n } => {
+                samples = n;
+                let (a, b) = crate::scene::ENVIRONMENT_GRADIENT;
+                Kind::Environment { up, a, b }
+            }
         };
         Light {
             kind,
@@ -139,6 +146,19 @@ pub fn sample_light(light: &Light, p: DVec3, uv: [f64; 2]) -> LightSample {
                 distance: FAR,
                 falloff: 1.0,
             }
+        }
+        Kind::Environment { up, a, b } => {
+            // Uniform on the sphere of directions, no shadow ray (distance
+            // 0): the kernel's 4π is the f32 12.566371, this the exact one.
+            let z = 1.0 - 2.0 * uv[0];
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f64::consts::TAU * uv[1];
+            let w = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            return LightSample {
+                to_light: w,
+                distance: 0.0,
+                falloff: 4.0 * std::f64::consts::PI * (a + b * w.dot(up)) / light.samples as f64,
+            };
         }
         Kind::Point { position } => (position, 1.0, None),
         Kind::Spot {

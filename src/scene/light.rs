@@ -63,7 +63,29 @@ pub enum LightKind {
         /// Light samples per pass, in 1..=[`MAX_LIGHT_SAMPLES`].
         samples: u32,
     },
+    /// Light from every direction at infinity (docs/materials.md,
+    /// "Environment"): radiance `L(ω) = intensity · diffuse · g(ω·up)` with
+    /// `g(u) = ENVIRONMENT_GRADIENT.0 + ENVIRONMENT_GRADIENT.1 · u`, a
+    /// studio sky over a darker ground. Evaluated without visibility: its
+    /// samples cast no shadow rays, so geometry enclosing the scene (a sky
+    /// box) does not block it.
+    Environment {
+        /// Unit world up (the sky's zenith).
+        up: DVec3,
+        /// Directions sampled per pass (uniform on the sphere), in
+        /// 1..=[`MAX_LIGHT_SAMPLES`].
+        samples: u32,
+    },
 }
+
+/// The environment's gradient `g(u) = a + b·u` of the up-component `u` of
+/// a direction, as `(a, b)`: 1 at the zenith, 0.6 at the horizon, 0.2 at the
+/// nadir. The one source of the coefficients: the GPU light gets them from
+/// here (`render::layout`), the reference and the tests too.
+pub const ENVIRONMENT_GRADIENT: (f64, f64) = (0.6, 0.4);
+
+/// Directions the environment samples per pass unless told otherwise.
+pub const ENVIRONMENT_SAMPLES: u32 = 64;
 
 /// Most light samples per area light and pass.
 pub const MAX_LIGHT_SAMPLES: u32 = 4096;
@@ -93,7 +115,9 @@ impl LightKind {
     /// one exhaustive `match` that says which kinds are area lights.
     pub fn samples(&self) -> Option<u32> {
         match self {
-            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => Some(*samples),
+            LightKind::Rect { samples, .. }
+            | LightKind::Sphere { samples, .. }
+            | LightKind::Environment { samples, .. } => Some(*samples),
             LightKind::Directional { .. } | LightKind::Point { .. } | LightKind::Spot { .. } => {
                 None
             }
@@ -103,7 +127,9 @@ impl LightKind {
     /// Overrides the sample count of an area light (no effect on others).
     pub fn set_samples(&mut self, n: u32) {
         match self {
-            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => *samples = n,
+            LightKind::Rect { samples, .. }
+            | LightKind::Sphere { samples, .. }
+            | LightKind::Environment { samples, .. } => *samples = n,
             LightKind::Directional { .. } | LightKind::Point { .. } | LightKind::Spot { .. } => {}
         }
     }
@@ -117,12 +143,20 @@ impl LightKind {
             LightKind::Spot { .. } => "spot",
             LightKind::Rect { .. } => "rect",
             LightKind::Sphere { .. } => "sphere",
+            LightKind::Environment { .. } => "environment",
         }
     }
 
     /// Every kind's [`LightKind::type_name`], for the tests that each kind
     /// is covered (tests/cpu/kinds.rs).
-    pub const TYPES: [&'static str; 5] = ["directional", "point", "spot", "rect", "sphere"];
+    pub const TYPES: [&'static str; 6] = [
+        "directional",
+        "point",
+        "spot",
+        "rect",
+        "sphere",
+        "environment",
+    ];
 
     /// The KHR_lights_punctual cone attenuation for a spot light at
     /// `cos_angle` = cos of the angle between the cone axis and the direction

@@ -13,7 +13,7 @@ pub mod texture;
 mod validate;
 
 pub use camera::{Camera, Projection};
-pub use light::{Light, LightKind, MAX_LIGHT_SAMPLES};
+pub use light::{Light, LightKind, ENVIRONMENT_GRADIENT, ENVIRONMENT_SAMPLES, MAX_LIGHT_SAMPLES};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
 pub use shading::{
     Checker, MetallicRoughness, MetallicRoughnessTextures, ParamField, ParamType, ParamValue,
@@ -158,7 +158,11 @@ impl Scene {
                 LightKind::Directional { .. } => f.directional_lights = true,
                 LightKind::Point { .. } => f.point_lights = true,
                 LightKind::Spot { .. } => f.spot_lights = true,
-                LightKind::Rect { .. } | LightKind::Sphere { .. } => f.area_lights = true,
+                // The environment is sampled like an area light (its samples
+                // have no shadow rays: distance 0).
+                LightKind::Rect { .. }
+                | LightKind::Sphere { .. }
+                | LightKind::Environment { .. } => f.area_lights = true,
             }
             // Every area kind (LightKind::samples, an exhaustive match) needs
             // the shadow stage's area sampling code.

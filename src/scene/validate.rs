@@ -607,6 +607,10 @@ fn light(i: usize, l: &Light) -> Result<(), Invalid> {
             radius_ok(&f("radius"), radius)?;
             samples_ok(&f("samples"), samples)?;
         }
+        LightKind::Environment { up, samples } => {
+            unit(&f("up"), up)?;
+            samples_ok(&f("samples"), samples)?;
+        }
     }
     Ok(())
 }

@@ -494,6 +494,11 @@ cli_cases! {
     cli_exposure_not_a_number: ["--exposure", "nan"] => Clap, ["--exposure", "nan", "finite"];
     cli_exposure_out_of_range: ["--exposure", "-100"] => Clap, ["--exposure", "-100", "[-64, 64]"];
     cli_unknown_tonemap: ["--tonemap", "filmic"] => Clap, ["--tonemap", "filmic", "pbr-neutral"];
+    cli_environment_negative: ["--environment", "-1"] => Clap, ["--environment", "-1", "[0, 1e6]"];
+    cli_environment_not_a_number: ["--environment", "bright"] => Clap, ["--environment", "bright", "finite"];
+    cli_background_two_values: ["--background", "0.5,0.5"] => Clap, ["--background", "0.5,0.5", "R,G,B"];
+    cli_background_infinite: ["--background", "0,inf,0"] => Clap, ["--background", "0,inf,0", "finite"];
+    cli_background_negative: ["--background", "0,-1,0"] => Clap, ["--background", "0,-1,0", "[0, 1e6]"];
 }
 
 #[test]
@@ -580,6 +585,12 @@ field_cases! {
         => "lights[1].intensity", [">= 0"];
     negative_light_colour: |v| v["lights"][0]["ambient"] = json!([-0.1, 0, 0])
         => "lights[0].ambient", ["non-negative"];
+    environment_zero_up: |v| v["lights"][0] = json!({"type": "environment", "up": [0, 0, 0]})
+        => "lights[0].up", ["non-zero"];
+    environment_zero_samples: |v| v["lights"][0] = json!({"type": "environment", "samples": 0})
+        => "lights[0].samples", ["1..=4096"];
+    up_not_a_field_of_a_point_light: |v| v["lights"][1]["up"] = json!([0, 1, 0])
+        => "lights[1].up", ["not a field of a point light"];
 }
 
 // ------------------------------------------------------------------- files

@@ -351,3 +351,100 @@ fn sphere_light_far_away_acts_like_a_point_light() {
         assert!((a[0] - b[0]).abs() <= 1e-3 * b[0], "{} vs {}", a[0], b[0]);
     }
 }
+
+/// The environment (docs/materials.md, "Environment"): radiance
+/// `I·g(ω·up)`, `g(u) = a + b·u`, from every direction, unshadowed. A white
+/// Lambert surface (Phong, `k_d` = 1: radiance `k_d·E` with no 1/π) with unit
+/// normal `n` receives `E = ∫ g(ω·up)·max(0, ω·n) dω = π·a + (2π/3)·b·(n·up)`
+/// (∫ over the hemisphere of `ω·n` is π, of `ω (ω·n)` is (2π/3)·n). The plane
+/// is tilted away from up so that both terms count; an occluder right above
+/// it must not darken it (no shadow rays).
+///
+/// Each pixel is a Monte Carlo estimate from `N` = samples × spp directions
+/// uniform on the sphere: it lies within 4 standard deviations `σ/√N` of `E`
+/// (`σ²` = E[X²] − E², `X = 4π·g·max(0, ω·n)`, E[X²] = 4π ∫ g² cos² dω over
+/// the hemisphere, here by the moments of a linear `g`), and the image's
+/// mean within 4σ/√(N·pixels).
+#[test]
+fn environment_light_on_a_plane() {
+    use penumbra::scene::ENVIRONMENT_GRADIENT;
+    let (a, b) = ENVIRONMENT_GRADIENT;
+    let up = DVec3::new(0.0, 1.0, 0.0);
+    let n = DVec3::new(0.6, 0.8, 0.0);
+    let intensity = 1.5f32;
+    let (samples, spp) = (1024u32, 4u32);
+    let mut scene = lambert_plane(
+        top_down(1.0, 16),
+        vec![Light {
+            kind: LightKind::Environment { up, samples },
+            intensity,
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+        }],
+    );
+    scene.objects[0].shape = Shape::Plane(Plane {
+        point: DVec3::ZERO,
+        normal: n,
+    });
+    // A triangle above the whole view, facing the plane: it would block
+    // most of the sky if the environment were shadowed.
+    scene.objects.push(Object {
+        maps: Default::default(),
+        shape: Shape::Triangle(Triangle {
+            vertices: [
+                DVec3::new(-20.0, 3.0, -20.0),
+                DVec3::new(20.0, 3.0, -20.0),
+                DVec3::new(0.0, 3.0, 20.0),
+            ],
+        }),
+        shader: 0,
+    });
+    scene.camera.position = DVec3::new(0.0, 2.0, 0.0);
+    let c = n.dot(up);
+    let i0 = intensity as f64;
+    let expected = i0 * (PI * a + 2.0 * PI / 3.0 * b * c);
+    // E[X²] = 4π ∫_hemi (I·(a + b·ω·up))² (ω·n)² dω, by the midpoint rule
+    // on the hemisphere around n (uniform in cos θ and φ, dω = dcos dφ).
+    let (t, s2) = (n.cross(DVec3::Z).normalize(), DVec3::Z);
+    let m = 400;
+    let mut second = 0.0;
+    for i in 0..m {
+        let cos = (i as f64 + 0.5) / m as f64; // uniform in cos: dω = dcos dφ
+        let sin = (1.0 - cos * cos).sqrt();
+        for j in 0..m {
+            let phi = (j as f64 + 0.5) / m as f64 * 2.0 * PI;
+            let w = n * cos + t * (sin * phi.cos()) + s2 * (sin * phi.sin());
+            let g = i0 * (a + b * w.dot(up));
+            second += g * g * cos * cos;
+        }
+    }
+    second *= 4.0 * PI * (2.0 * PI / (m * m) as f64);
+    let sigma = (second - expected * expected).sqrt();
+    let count = (samples * spp) as f64;
+    let frame = support::render_with(
+        &scene,
+        KernelOptions::default(),
+        Sampling {
+            spp,
+            seed: 0,
+            time_budget: None,
+        },
+    );
+    let pixels = &frame.image.pixels;
+    let mut sum = 0.0;
+    for p in pixels {
+        let v = p[0] as f64;
+        assert!(
+            (v - expected).abs() <= 4.0 * sigma / count.sqrt(),
+            "{v} vs {expected} (σ {sigma})"
+        );
+        sum += v;
+    }
+    let mean = sum / pixels.len() as f64;
+    let bound = 4.0 * sigma / (count * pixels.len() as f64).sqrt();
+    assert!(
+        (mean - expected).abs() <= bound,
+        "mean {mean} vs {expected} ± {bound}"
+    );
+}

@@ -68,7 +68,7 @@ fn transformed(scene: &Scene, t: DVec3, s: f64) -> Scene {
                 l.intensity *= (s * s) as f32;
             }
             // Directions do not move.
-            LightKind::Directional { .. } => {}
+            LightKind::Directional { .. } | LightKind::Environment { .. } => {}
             // Exhaustive, so that a new kind must say how it moves.
             LightKind::Rect { .. } | LightKind::Sphere { .. } => {
                 unimplemented!("transformed(): no precision scene has an area light yet")

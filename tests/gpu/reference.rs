@@ -352,6 +352,58 @@ fn metallic_roughness_matches_the_gpu() {
     );
 }
 
+/// The environment (docs/materials.md, "Environment") on metals and
+/// dielectrics of four roughnesses and a Phong floor, with an unshadowed
+/// point light: the GPU's environment samples are the reference's, so the
+/// images agree as on the other scenes.
+#[test]
+fn environment_matches_the_gpu() {
+    let mut shaders = vec![
+        r#""floor": {"type": "phong", "ambient": [0, 0, 0], "diffuse": [0.4, 0.4, 0.35], "specular": [0.2, 0.2, 0.2], "shininess": 20}"#.to_string(),
+    ];
+    let mut objects = vec![
+        r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"}"#
+            .to_string(),
+    ];
+    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+        for (j, metallic) in [0.0, 1.0].iter().enumerate() {
+            let name = format!("m{i}{j}");
+            shaders.push(format!(
+                r#""{name}": {{"type": "metallic_roughness", "base_colour": [0.9, 0.5, 0.2], "metallic": {metallic}, "roughness": {roughness}}}"#
+            ));
+            objects.push(format!(
+                r#"{{"type": "sphere", "center": [{}, 0.5, {}], "radius": 0.45, "shader": "{name}"}}"#,
+                i as f64 * 1.1 - 1.65,
+                j as f64 * 1.2 - 0.6
+            ));
+        }
+    }
+    let json = format!(
+        r#"{{
+  "camera": {{"position": [0, 2.5, 4.5], "look_at": [0, 0.3, 0], "up": [0, 1, 0], "fov": 45, "width": 120, "height": 75}},
+  "shaders": {{ {} }},
+  "objects": [ {} ],
+  "lights": [
+    {{"type": "environment", "up": [0.1, 1, 0.2], "samples": 8, "intensity": 1.5, "diffuse": [1, 0.9, 0.8], "specular": [1, 0.9, 0.8]}},
+    {{"type": "point", "position": [2, 2, 2], "intensity": 3, "ambient": [0, 0, 0], "diffuse": [0.5, 0.7, 1], "specular": [1, 1, 1]}}
+  ]
+}}"#,
+        shaders.join(", "),
+        objects.join(", ")
+    );
+    let scene = support::load_json(&json);
+    assert!(matches!(
+        scene.lights[0].kind,
+        LightKind::Environment { samples: 8, .. }
+    ));
+    let sampling = Sampling {
+        spp: 2,
+        seed: 5,
+        time_budget: None,
+    };
+    gpu_vs_reference("environment", &scene, KernelOptions::default(), sampling);
+}
+
 /// The benchmark scene at 1024×1024 against Embree's figures (see
 /// tests/gpu/bunny.rs, which separates ground and bunny the same way):
 /// 858,452 primary rays hit (149,894 the bunny), and 31,540 ground points are

@@ -17,7 +17,6 @@ use common::stats::upper_median;
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::tiles::{TilePlan, DEFAULT_STAGE_MEMORY};
 use penumbra::render::{Renderer, RendererOptions};
-use penumbra::scene::LightKind;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -42,10 +41,7 @@ fn main() -> anyhow::Result<()> {
     let samples: u32 = scene
         .lights
         .iter()
-        .map(|l| match l.kind {
-            LightKind::Rect { samples, .. } | LightKind::Sphere { samples, .. } => samples,
-            _ => 1,
-        })
+        .map(|l| l.kind.samples().unwrap_or(1))
         .sum();
     let mib = |b: u64| b as f64 / 1048576.0;
     let checker = scene.features().checker;

@@ -3,6 +3,7 @@
 //! (reference.rs); summary.rs writes the one summary line.
 
 mod batch;
+mod lighting;
 mod part;
 mod reference;
 mod summary;
@@ -42,6 +43,14 @@ pub struct RenderArgs {
     #[arg(long, value_name = "MAP", default_value = "none",
           value_parser = |s: &str| s.parse::<penumbra::tonemap::ToneMap>())]
     tonemap: penumbra::tonemap::ToneMap,
+    /// Add the environment light of this intensity (a studio sky over a
+    /// darker ground, unshadowed; docs/materials.md, "Environment").
+    #[arg(long, value_name = "INTENSITY", allow_hyphen_values = true,
+          value_parser = lighting::parse_environment)]
+    environment: Option<f32>,
+    /// Colour where camera rays miss, linear R,G,B (default: the scene's).
+    #[arg(long, value_name = "R,G,B", value_parser = lighting::parse_background)]
+    background: Option<[f32; 3]>,
     /// Image width in pixels (overrides the scene's).
     #[arg(long, value_parser = side_parser())]
     width: Option<u32>,
@@ -244,6 +253,7 @@ fn load(
     for note in &loaded.notes {
         eprintln!("note: {}", terminal::diagnostic(note));
     }
+    lighting::apply(&mut loaded.scene, args.environment, args.background);
     if let Some(n) = args.area_samples {
         for l in &mut loaded.scene.lights {
             l.kind.set_samples(n);

@@ -57,6 +57,8 @@ pub const LIGHT_SPOT: u32 = 2;
 pub const LIGHT_RECT: u32 = 3;
 /// Sphere area light kind.
 pub const LIGHT_SPHERE: u32 = 4;
+/// Environment kind (sampled before the area kinds in `sample_light`).
+pub const LIGHT_ENVIRONMENT: u32 = 5;
 
 /// The kernel's record of light `l`, positions relative to `eye`.
 pub(super) fn light(l: &crate::scene::Light, eye: DVec3) -> Light {
@@ -111,6 +113,14 @@ pub(super) fn light(l: &crate::scene::Light, eye: DVec3) -> Light {
             gl.kind = LIGHT_SPHERE;
             gl.position = f3(center - eye);
             gl.radius = radius as f32;
+            gl.samples = samples;
+        }
+        LightKind::Environment { up, samples } => {
+            let (a, b) = crate::scene::ENVIRONMENT_GRADIENT;
+            gl.kind = LIGHT_ENVIRONMENT;
+            gl.direction = f3(up);
+            gl.cone_offset = a as f32;
+            gl.cone_scale = b as f32;
             gl.samples = samples;
         }
     }

@@ -32,8 +32,8 @@ pub use aov::Aov;
 pub use bvh::{node_bounds, node_bounds_f32, BvhNode, PRIM_SPHERE};
 pub use camera::Camera;
 pub use lights::{
-    light_block, Light, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_RECT, LIGHT_SPHERE, LIGHT_SPOT,
-    UNIFORM_LIGHTS,
+    light_block, Light, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT, LIGHT_RECT,
+    LIGHT_SPHERE, LIGHT_SPOT, UNIFORM_LIGHTS,
 };
 pub use primitives::{plane_axes, Plane, Sphere, Triangle, VertexNormals, NO_NORMALS};
 pub use queries::{QueryHit, QueryRay};
@@ -489,6 +489,7 @@ mod tests {
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_RECT", LIGHT_RECT),
             ("LIGHT_SPHERE", LIGHT_SPHERE),
+            ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
             ("KIND_PLANE", crate::render::trace::KIND_PLANE),
             ("KIND_SPHERE", crate::render::trace::KIND_SPHERE),
             ("KIND_TRIANGLE", crate::render::trace::KIND_TRIANGLE),

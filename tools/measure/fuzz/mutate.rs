@@ -84,9 +84,15 @@ fn key_values(key: &str, context: &str) -> Option<Vec<Value>> {
                 "SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4", "VEC5",
             ]),
             "cameras" => strs(&["perspective", "orthographic", "fisheye"]),
-            "extensions" | "lights" => {
-                strs(&["directional", "point", "spot", "rect", "sphere", "area"])
-            }
+            "extensions" | "lights" => strs(&[
+                "directional",
+                "point",
+                "spot",
+                "rect",
+                "sphere",
+                "environment",
+                "area",
+            ]),
             "objects" => strs(&["plane", "sphere", "triangle", "mesh", "cone"]),
             "shaders" => strs(&[
                 "phong",

@@ -296,7 +296,8 @@ fn generated_scenes() -> Vec<Value> {
             {"type": "point", "position": [2, 3, 2], "intensity": 10, "diffuse": [1, 1, 1]},
             {"type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "inner_angle": 10, "outer_angle": 30},
             {"type": "rect", "corner": [0, 3, 0], "edge1": [1, 0, 0], "edge2": [0, 0, 1], "samples": 4},
-            {"type": "sphere", "center": [-2, 3, 0], "radius": 0.3, "samples": 2}
+            {"type": "sphere", "center": [-2, 3, 0], "radius": 0.3, "samples": 2},
+            {"type": "environment", "up": [0, 1, 0], "samples": 2, "intensity": 0.5}
         ]
     });
     let mut ortho = all.clone();
