@@ -115,6 +115,7 @@ fn the_summary_line_reports_the_driver_compile_of_each_pipeline() {
     let each = line
         .split(" | driver compile: ")
         .nth(1)
+        .and_then(|rest| rest.split(" | ").next())
         .expect("per pipeline");
     let parts: Vec<(&str, f64)> = each
         .split(", ")

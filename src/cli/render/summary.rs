@@ -118,10 +118,10 @@ pub fn gpu_line(
             ("write", write),
         ],
         &format!(
-            "{}{width_note}{}{}",
+            "{}{}{width_note}{}",
+            driver_compiles_note(&frame.driver_compiles),
             triangles_note(scene),
-            texture_note(s.texture_bytes),
-            driver_compiles_note(&frame.driver_compiles)
+            texture_note(s.texture_bytes)
         ),
     )
 }
