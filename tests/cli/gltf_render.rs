@@ -28,6 +28,27 @@ fn base64(bytes: &[u8]) -> String {
     out
 }
 
+/// Renders `scene` at 48×36 into `dir` and returns its summary line.
+fn summary_of(scene: &Path, dir: &Path) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render".as_ref(), scene.as_os_str(), "-o".as_ref()])
+        .arg(dir.join("out.png"))
+        .args(["--width", "48", "--height", "36"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+        .lines()
+        .find(|l| l.contains(" Mrays/s"))
+        .expect("summary")
+        .to_string()
+}
+
 #[test]
 fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -60,22 +81,7 @@ fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("boxes.gltf");
     std::fs::write(&scene, serde_json::to_vec(&gltf).unwrap()).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .args(["render".as_ref(), scene.as_os_str(), "-o".as_ref()])
-        .arg(dir.path().join("out.png"))
-        .args(["--width", "48", "--height", "36"])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let line = stdout
-        .lines()
-        .find(|l| l.contains(" Mrays/s"))
-        .expect("summary");
+    let line = summary_of(&scene, dir.path());
     assert!(line.contains(" | 36 triangles"), "{line}");
     assert!(
         line.contains(" | textures ") && line.contains(" MiB (mip-maps included)"),
@@ -90,22 +96,7 @@ fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
 fn the_summary_line_reports_the_driver_compile_of_each_pipeline() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textured.json");
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .args(["render".as_ref(), scene.as_os_str(), "-o".as_ref()])
-        .arg(dir.path().join("out.png"))
-        .args(["--width", "48", "--height", "36"])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let line = stdout
-        .lines()
-        .find(|l| l.contains(" Mrays/s"))
-        .expect("summary");
+    let line = summary_of(&scene, dir.path());
     let ms = |s: &str| -> f64 { s.trim().trim_end_matches(" ms").parse().unwrap() };
     let total = ms(line
         .split("driver compile ")

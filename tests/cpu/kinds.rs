@@ -55,15 +55,15 @@ fn reference_scenes() -> Vec<Scene> {
 }
 
 /// Where a kind of `family` ("lights", "objects", "shaders") must appear.
-struct Places {
+struct Places<'a> {
     /// Files whose text must hold `"TYPE"` or `` `TYPE` `` (the fuzzing
     /// harness's type strings, the scene format's documentation).
-    quoted: &'static [&'static str],
+    quoted: &'a [&'a str],
     /// Files of which one must hold `"type": "TYPE"`: a scene with the kind.
-    typed: &'static [&'static [&'static str]],
+    typed: &'a [&'a [&'a str]],
 }
 
-fn check_places(family: &str, types: &[&str], places: &Places, missing: &mut Vec<String>) {
+fn check_places(family: &str, types: &[&str], places: &Places<'_>, missing: &mut Vec<String>) {
     for t in types {
         for file in places.quoted {
             let text = text(file);
@@ -93,31 +93,48 @@ fn reference_covers(types: &[&str], in_scenes: &BTreeSet<&str>, prefix: &str) ->
         .collect()
 }
 
-#[test]
-fn every_light_kind_is_covered() {
+/// What every family is checked for: the fuzz harness's strings and
+/// scenes/README.md name each kind, a generated fuzz seed and a case of
+/// `bad_input` use it, every kind the reference scenes `used` is one of
+/// `types`, and each kind of `compared` is in a reference scene or in the
+/// reference tests' code (as `PREFIX::Variant`).
+fn family_gaps(
+    family: &str,
+    types: &[&str],
+    bad_input: &'static [&'static str],
+    used: &BTreeSet<&str>,
+    prefix: &str,
+    compared: &[&str],
+) -> Vec<String> {
     let mut missing = Vec::new();
     check_places(
-        "light",
-        &LightKind::TYPES,
+        family,
+        types,
         &Places {
             quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[
-                &["tools/measure/fuzz/seeds.rs"],
-                &["tests/cli/bad_input.rs", "tests/cli/area_light_input.rs"],
-            ],
+            typed: &[&["tools/measure/fuzz/seeds.rs"], bad_input],
         },
         &mut missing,
     );
-    let scenes = reference_scenes();
-    let used: BTreeSet<&str> = scenes
+    assert!(used.iter().all(|t| types.contains(t)), "{used:?}");
+    missing.extend(reference_covers(compared, used, prefix));
+    missing
+}
+
+#[test]
+fn every_light_kind_is_covered() {
+    let used: BTreeSet<&str> = reference_scenes()
         .iter()
         .flat_map(|s| s.lights.iter().map(|l| l.kind.type_name()))
         .collect();
-    assert!(
-        used.iter().all(|t| LightKind::TYPES.contains(t)),
-        "{used:?}"
+    let mut missing = family_gaps(
+        "light",
+        &LightKind::TYPES,
+        &["tests/cli/bad_input.rs", "tests/cli/area_light_input.rs"],
+        &used,
+        "LightKind",
+        &LightKind::TYPES,
     );
-    missing.extend(reference_covers(&LightKind::TYPES, &used, "LightKind"));
     // An end-to-end test of each kind's light against its formula.
     let end_to_end = text("tests/gpu/lights.rs") + &text("tests/gpu/area_lights.rs");
     for t in LightKind::TYPES {
@@ -134,65 +151,41 @@ fn every_light_kind_is_covered() {
 
 #[test]
 fn every_object_kind_is_covered() {
-    let mut missing = Vec::new();
-    check_places(
-        "object",
-        &Shape::TYPES,
-        &Places {
-            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[
-                &["tools/measure/fuzz/seeds.rs"],
-                &["tests/cli/bad_input.rs"],
-            ],
-        },
-        &mut missing,
-    );
-    let scenes = reference_scenes();
-    let used: BTreeSet<&str> = scenes
+    let used: BTreeSet<&str> = reference_scenes()
         .iter()
         .flat_map(|s| s.objects.iter().map(|o| o.shape.type_name()))
         .collect();
-    assert!(used.iter().all(|t| Shape::TYPES.contains(t)), "{used:?}");
-    missing.extend(reference_covers(&Shape::TYPES, &used, "Shape"));
+    let missing = family_gaps(
+        "object",
+        &Shape::TYPES,
+        &["tests/cli/bad_input.rs"],
+        &used,
+        "Shape",
+        &Shape::TYPES,
+    );
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
 
 #[test]
 fn every_shader_kind_is_covered() {
-    let mut missing = Vec::new();
-    check_places(
-        "shader",
-        &Shader::TYPES,
-        &Places {
-            quoted: &["tools/measure/fuzz/mutate.rs", "scenes/README.md"],
-            typed: &[
-                &["tools/measure/fuzz/seeds.rs"],
-                &["tests/cli/bad_input.rs"],
-            ],
-        },
-        &mut missing,
-    );
-    let scenes = reference_scenes();
-    let used: BTreeSet<&str> = scenes
+    let used: BTreeSet<&str> = reference_scenes()
         .iter()
         .flat_map(|s| s.shaders.iter().map(Shader::type_name))
         .collect();
-    assert!(used.iter().all(|t| Shader::TYPES.contains(t)), "{used:?}");
     // The reference refuses user WGSL (reference::supports): user shaders
     // are tested against their formulas on the GPU instead.
-    let refused: Vec<&str> = Shader::TYPES.into_iter().filter(|t| *t == "wgsl").collect();
-    for t in &refused {
-        if !text("tests/gpu/user_shaders.rs").contains(&format!("\"type\": \"{t}\"")) {
-            missing.push(format!(
-                "shader kind \"{t}\": not in tests/gpu/user_shaders.rs"
-            ));
-        }
+    let compared: Vec<&str> = Shader::TYPES.into_iter().filter(|t| *t != "wgsl").collect();
+    let mut missing = family_gaps(
+        "shader",
+        &Shader::TYPES,
+        &["tests/cli/bad_input.rs"],
+        &used,
+        "Shader",
+        &compared,
+    );
+    if !text("tests/gpu/user_shaders.rs").contains("\"type\": \"wgsl\"") {
+        missing.push("shader kind \"wgsl\": not in tests/gpu/user_shaders.rs".into());
     }
-    let compared: Vec<&str> = Shader::TYPES
-        .into_iter()
-        .filter(|t| !refused.contains(t))
-        .collect();
-    missing.extend(reference_covers(&compared, &used, "Shader"));
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
 
