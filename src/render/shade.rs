@@ -215,6 +215,39 @@ fn generated(
     out
 }
 
+/// A built-in shader's parameter words, in the order of its file's `Params`
+/// fields: `value` gives a field's value by name and type (`None`: not one
+/// of the shader's fields, which `known` lists for the error).
+fn builtin_words(
+    fields: &[ParamField],
+    label: &str,
+    known: &str,
+    value: impl Fn(&str, ParamType) -> Option<Vec<f32>>,
+) -> Result<Vec<u32>, CompileError> {
+    let mut words = Vec::new();
+    for ParamField { name, ty } in fields {
+        let Some(v) = value(name, *ty) else {
+            return Err(CompileError {
+                location: label.to_string(),
+                message: format!("Params field `{name}: {}` is not one of {known}", ty.wgsl()),
+            });
+        };
+        words.extend(v.iter().map(|x| x.to_bits()));
+    }
+    Ok(words)
+}
+
+/// A texture parameter's word (its use's index, or none), as an `f32`'s bits.
+fn texture_word(
+    uses: &[crate::scene::TextureRef],
+    t: &Option<crate::scene::TextureRef>,
+) -> Vec<f32> {
+    let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
+        crate::scene::Scene::texture_use_index(uses, t)
+    });
+    vec![f32::from_bits(index)]
+}
+
 /// The parameter words of a built-in Phong-type shader, in the order of the
 /// file's `Params` fields (the JSON types `phong` and `blinn_phong` map to
 /// these files and keep their fields).
@@ -224,35 +257,18 @@ pub fn phong_words(
     uses: &[crate::scene::TextureRef],
     label: &str,
 ) -> Result<Vec<u32>, CompileError> {
-    let mut words = Vec::new();
-    for ParamField { name, ty: kind } in fields {
-        let texture = |t: &Option<crate::scene::TextureRef>| {
-            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
-                crate::scene::Scene::texture_use_index(uses, t)
-            });
-            vec![f32::from_bits(index)]
-        };
-        let value: Vec<f32> = match (name.as_str(), kind) {
+    builtin_words(fields, label, "the built-in shader's fields (ambient, diffuse, specular: vec3<f32>; shininess: f32; ambient_texture, diffuse_texture, specular_texture: u32)", |name, ty| {
+        Some(match (name, ty) {
             ("ambient", ParamType::Vec3) => p.ambient.to_array().to_vec(),
             ("diffuse", ParamType::Vec3) => p.diffuse.to_array().to_vec(),
             ("specular", ParamType::Vec3) => p.specular.to_array().to_vec(),
             ("shininess", ParamType::F32) => vec![p.shininess],
-            ("ambient_texture", ParamType::U32) => texture(&p.textures.ambient),
-            ("diffuse_texture", ParamType::U32) => texture(&p.textures.diffuse),
-            ("specular_texture", ParamType::U32) => texture(&p.textures.specular),
-            _ => {
-                return Err(CompileError {
-                    location: label.to_string(),
-                    message: format!(
-                        "Params field `{name}: {}` is not one of the built-in shader's fields (ambient, diffuse, specular: vec3<f32>; shininess: f32; ambient_texture, diffuse_texture, specular_texture: u32)",
-                        kind.wgsl()
-                    ),
-                })
-            }
-        };
-        words.extend(value.iter().map(|v| v.to_bits()));
-    }
-    Ok(words)
+            ("ambient_texture", ParamType::U32) => texture_word(uses, &p.textures.ambient),
+            ("diffuse_texture", ParamType::U32) => texture_word(uses, &p.textures.diffuse),
+            ("specular_texture", ParamType::U32) => texture_word(uses, &p.textures.specular),
+            _ => return None,
+        })
+    })
 }
 
 /// The parameter words of the built-in metallic-roughness shader, in the
@@ -263,35 +279,20 @@ pub fn metallic_roughness_words(
     uses: &[crate::scene::TextureRef],
     label: &str,
 ) -> Result<Vec<u32>, CompileError> {
-    let mut words = Vec::new();
-    for ParamField { name, ty: kind } in fields {
-        let texture = |t: &Option<crate::scene::TextureRef>| {
-            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
-                crate::scene::Scene::texture_use_index(uses, t)
-            });
-            vec![f32::from_bits(index)]
-        };
-        let value: Vec<f32> = match (name.as_str(), kind) {
+    builtin_words(fields, label, "the metallic-roughness shader's fields (base_colour: vec3<f32>; metallic, roughness: f32; base_colour_texture, metallic_roughness_texture: u32)", |name, ty| {
+        Some(match (name, ty) {
             ("base_colour", ParamType::Vec3) => m.base_colour.to_array().to_vec(),
             ("metallic", ParamType::F32) => vec![m.metallic],
             ("roughness", ParamType::F32) => vec![m.roughness],
-            ("base_colour_texture", ParamType::U32) => texture(&m.textures.base_colour),
+            ("base_colour_texture", ParamType::U32) => {
+                texture_word(uses, &m.textures.base_colour)
+            }
             ("metallic_roughness_texture", ParamType::U32) => {
-                texture(&m.textures.metallic_roughness)
+                texture_word(uses, &m.textures.metallic_roughness)
             }
-            _ => {
-                return Err(CompileError {
-                    location: label.to_string(),
-                    message: format!(
-                        "Params field `{name}: {}` is not one of the metallic-roughness shader's fields (base_colour: vec3<f32>; metallic, roughness: f32; base_colour_texture, metallic_roughness_texture: u32)",
-                        kind.wgsl()
-                    ),
-                })
-            }
-        };
-        words.extend(value.iter().map(|v| v.to_bits()));
-    }
-    Ok(words)
+            _ => return None,
+        })
+    })
 }
 
 /// The parameter words of the built-in specular-glossiness shader, in the
@@ -302,35 +303,18 @@ pub fn specular_glossiness_words(
     uses: &[crate::scene::TextureRef],
     label: &str,
 ) -> Result<Vec<u32>, CompileError> {
-    let mut words = Vec::new();
-    for ParamField { name, ty: kind } in fields {
-        let texture = |t: &Option<crate::scene::TextureRef>| {
-            let index = t.as_ref().map_or(super::layout::textures::NO_TEXTURE, |t| {
-                crate::scene::Scene::texture_use_index(uses, t)
-            });
-            vec![f32::from_bits(index)]
-        };
-        let value: Vec<f32> = match (name.as_str(), kind) {
+    builtin_words(fields, label, "the specular-glossiness shader's fields (diffuse, specular: vec3<f32>; glossiness: f32; diffuse_texture, specular_glossiness_texture: u32)", |name, ty| {
+        Some(match (name, ty) {
             ("diffuse", ParamType::Vec3) => m.diffuse.to_array().to_vec(),
             ("specular", ParamType::Vec3) => m.specular.to_array().to_vec(),
             ("glossiness", ParamType::F32) => vec![m.glossiness],
-            ("diffuse_texture", ParamType::U32) => texture(&m.textures.diffuse),
+            ("diffuse_texture", ParamType::U32) => texture_word(uses, &m.textures.diffuse),
             ("specular_glossiness_texture", ParamType::U32) => {
-                texture(&m.textures.specular_glossiness)
+                texture_word(uses, &m.textures.specular_glossiness)
             }
-            _ => {
-                return Err(CompileError {
-                    location: label.to_string(),
-                    message: format!(
-                        "Params field `{name}: {}` is not one of the specular-glossiness shader's fields (diffuse, specular: vec3<f32>; glossiness: f32; diffuse_texture, specular_glossiness_texture: u32)",
-                        kind.wgsl()
-                    ),
-                })
-            }
-        };
-        words.extend(value.iter().map(|v| v.to_bits()));
-    }
-    Ok(words)
+            _ => return None,
+        })
+    })
 }
 
 /// One shade program: a shader file, its text, and its `Params` fields.
