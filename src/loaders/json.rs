@@ -1005,21 +1005,12 @@ impl Reader<'_> {
                 self.colour(&f("specular"), c)?
             }
         };
-        let specular_glossiness = match &s.specular_glossiness {
-            None | Some(serde_json::Value::Null) => None,
-            Some(serde_json::Value::Object(m)) => {
-                Some(self.texture_use(&f("specular_glossiness"), m, base, guard, textures)?)
-            }
-            Some(other) => {
-                return Err(self.err(
-                    f("specular_glossiness"),
-                    format!(
-                        "must be a texture {{\"texture\": \"file.png\"}}, got {}",
-                        describe(other)
-                    ),
-                ))
-            }
-        };
+        let specular_glossiness = self.optional_texture(
+            &f("specular_glossiness"),
+            s.specular_glossiness.as_ref(),
+            r#"{"texture": "file.png"}"#,
+            (base, guard, textures),
+        )?;
         Ok(Shader::SpecularGlossiness(
             crate::scene::SpecularGlossiness {
                 diffuse,
@@ -1031,6 +1022,26 @@ impl Reader<'_> {
                 },
             },
         ))
+    }
+
+    /// A field that is absent (or null) or a texture object like `example`.
+    fn optional_texture(
+        &self,
+        field: &str,
+        v: Option<&serde_json::Value>,
+        example: &str,
+        (base, guard, textures): (&Path, &super::guard::Guard, &mut Textures),
+    ) -> Result<Option<TextureRef>, SceneError> {
+        match v {
+            None | Some(serde_json::Value::Null) => Ok(None),
+            Some(serde_json::Value::Object(m)) => {
+                Ok(Some(self.texture_use(field, m, base, guard, textures)?))
+            }
+            Some(other) => Err(self.err(
+                field,
+                format!("must be a texture {example}, got {}", describe(other)),
+            )),
+        }
     }
 
     /// A `metallic_roughness` shader at `at`: glTF's defaults (base colour
@@ -1058,21 +1069,12 @@ impl Reader<'_> {
             guard,
             textures,
         )?;
-        let metallic_roughness = match &s.metallic_roughness {
-            None | Some(serde_json::Value::Null) => None,
-            Some(serde_json::Value::Object(m)) => {
-                Some(self.texture_use(&f("metallic_roughness"), m, base, guard, textures)?)
-            }
-            Some(other) => {
-                return Err(self.err(
-                    f("metallic_roughness"),
-                    format!(
-                        "must be a texture {{\"texture\": \"file.png\", \"encoding\": \"linear\"}}, got {}",
-                        describe(other)
-                    ),
-                ))
-            }
-        };
+        let metallic_roughness = self.optional_texture(
+            &f("metallic_roughness"),
+            s.metallic_roughness.as_ref(),
+            r#"{"texture": "file.png", "encoding": "linear"}"#,
+            (base, guard, textures),
+        )?;
         Ok(Shader::MetallicRoughness(MetallicRoughness {
             base_colour,
             metallic,
