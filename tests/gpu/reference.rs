@@ -312,7 +312,7 @@ fn metallic_roughness_matches_the_gpu() {
             i as f64 * 1.1 - 0.55
         ));
     }
-    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+    for (i, roughness) in [0.1, 0.2, 0.5, 1.0].iter().enumerate() {
         for (j, metallic) in [0.0, 1.0].iter().enumerate() {
             let name = format!("m{i}{j}");
             shaders.push(format!(
@@ -365,7 +365,7 @@ fn environment_matches_the_gpu() {
         r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"}"#
             .to_string(),
     ];
-    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+    for (i, roughness) in [0.1, 0.2, 0.5, 1.0].iter().enumerate() {
         for (j, metallic) in [0.0, 1.0].iter().enumerate() {
             let name = format!("m{i}{j}");
             shaders.push(format!(
