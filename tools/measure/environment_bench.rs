@@ -247,19 +247,8 @@ fn main() -> anyhow::Result<()> {
          (`tools/measure/environment_bench.rs`): `scenes/metal_spheres.gltf` at {WIDTH}×{HEIGHT}, \
          its roughnesses squared (metals and dielectrics at 0.04, 0.16, 0.36, 0.64, 1), over its \
          floor, lit by the environment alone ({SAMPLES} directions per pass), background black.\n\n\
-         | | |\n|---|---|\n| CPU | {} |\n| Device | {} |\n| Driver | {} — {} |\n| Commit | {} |\n| Date | {} |\n| Load average at the end (1, 5, 15 min; other processes share the cores) | {} |\n",
-        common::machine::CpuInfo::read().describe(),
-        device.name,
-        device.driver_name,
-        device.driver_info,
-        common::machine::git_commit(&common::repo_root()),
-        common::machine::utc_now(),
-        std::fs::read_to_string("/proc/loadavg")
-            .unwrap_or_default()
-            .split_whitespace()
-            .take(3)
-            .collect::<Vec<_>>()
-            .join(", "),
+         {}",
+        common::machine::report_table(device),
     );
     let _ = writeln!(
         o,
