@@ -72,6 +72,20 @@ fn lit_fraction(path: &Path, materials: GltfMaterials) -> (usize, usize) {
     (hits.len(), lit)
 }
 
+/// At least `min_hits` hit pixels of `path`, 90 % of them lit, under both
+/// material models (`label` names the view in messages).
+fn check_lit(path: &Path, label: &str, min_hits: usize) {
+    for materials in MATERIALS {
+        let (hits, lit) = lit_fraction(path, materials);
+        eprintln!("{label} ({materials:?}): {lit} of {hits} hit pixels lit");
+        assert!(hits > min_hits, "{label}: {hits} hits");
+        assert!(
+            lit * 10 >= hits * 9,
+            "{label} ({materials:?}): {lit} of {hits} lit"
+        );
+    }
+}
+
 /// The JSON and BIN chunks of a GLB file (a `.gltf` file: its JSON and no
 /// BIN chunk; its buffers are data URIs or files).
 fn split_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
@@ -132,19 +146,7 @@ fn look_rotation(eye: glam::DVec3, target: glam::DVec3) -> [f64; 4] {
 #[test]
 fn model_files_without_lights_are_lit_where_their_framing_camera_looks() {
     for path in models().into_iter().chain(flat_models()) {
-        for materials in MATERIALS {
-            let (hits, lit) = lit_fraction(&path, materials);
-            eprintln!(
-                "{} ({materials:?}): {lit} of {hits} hit pixels lit",
-                path.display()
-            );
-            assert!(hits > 1000, "{}: {hits} hits", path.display());
-            assert!(
-                lit * 10 >= hits * 9,
-                "{} ({materials:?}): {lit} of {hits} lit",
-                path.display()
-            );
-        }
+        check_lit(&path, &path.display().to_string(), 1000);
     }
 }
 
@@ -199,19 +201,7 @@ fn model_files_without_lights_are_lit_from_cameras_on_every_side() {
                 std::fs::write(&file, glb(&json, &bin)).unwrap();
                 file
             };
-            for materials in MATERIALS {
-                let (hits, lit) = lit_fraction(&file, materials);
-                eprintln!(
-                    "{} from {side} ({materials:?}): {lit} of {hits} hit pixels lit",
-                    path.display()
-                );
-                assert!(hits > 500, "{} from {side}: {hits} hits", path.display());
-                assert!(
-                    lit * 10 >= hits * 9,
-                    "{} from {side} ({materials:?}): {lit} of {hits} lit",
-                    path.display()
-                );
-            }
+            check_lit(&file, &format!("{} from {side}", path.display()), 500);
         }
     }
 }
