@@ -211,7 +211,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (loaded, load) = load(&scene, &args, renderer.as_ref())?;
     match renderer.as_mut() {
-        None => reference::run(&scene, &loaded.scene, &args, &out, load),
+        None => reference::run(&scene, &loaded, &args, &out, load),
         Some(r) if args.is_part() => part::run(r, &scene, &loaded, &args, &out, load),
         Some(r) => render_image(r, &scene, &loaded, &args, &out, load, vector_width),
     }
@@ -269,12 +269,7 @@ fn render_image(
     let t1 = Instant::now();
     match (args.aov, &aovs) {
         (Some(set), Some(a)) => output::write_exr_with_aovs(out, &frame.image, a, set)?,
-        _ => {
-            let format = output::Format::from_path(out)?;
-            let display = args.display.display();
-            let image = display.for_format(&frame.image, format, loaded.lit_by_default);
-            output::write_image(out, &image)?
-        }
+        _ => write_shown(out, &frame.image, loaded, args)?,
     }
     let write = t1.elapsed();
     println!(
@@ -282,6 +277,21 @@ fn render_image(
         summary::gpu_line(renderer, &loaded.scene, &frame, load, write, vector_width)
     );
     Ok(())
+}
+
+/// Writes `image` to `out` as its format shows it: a PNG exposed and
+/// tone-mapped (`--exposure`, `--tonemap` or the scene's default), an EXR
+/// linear.
+fn write_shown(
+    out: &Path,
+    image: &penumbra::frame::Image,
+    loaded: &Loaded,
+    args: &RenderArgs,
+) -> anyhow::Result<()> {
+    let format = output::Format::from_path(out)?;
+    let display = args.display.display();
+    let shown = display.for_format(image, format, loaded.lit_by_default);
+    Ok(output::write_image(out, &shown)?)
 }
 
 /// A device limit names a scene field: say which file, or which option where
