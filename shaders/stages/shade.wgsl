@@ -91,6 +91,10 @@ const penumbra_FLAG_COLOURS: u32 = 32u;
 override penumbra_HAS_ATTRIBUTES: bool = true;
 override penumbra_HAS_COLOURS: bool = true;
 override penumbra_HAS_EMISSION: bool = true;
+// Some object has an occlusion texture and some light is the environment
+// (scene::Features::occlusion): only then is the occlusion factor computed
+// and the environment's samples scaled by it.
+override penumbra_HAS_OCCLUSION: bool = true;
 // The scene has checkers (render.wgsl's HAS_CHECKER): only then does the
 // hit stage resolve materials into the resolved texels.
 override penumbra_HAS_CHECKER: bool = true;
@@ -226,10 +230,26 @@ fn penumbra_shade_stage(
         colour = penumbra_ambient_sum(s, p);
         if penumbra_HAS_EMISSION && (push.flags & penumbra_FLAG_EMISSION) != 0u {
             let m = penumbra_surface_map(object, 0u);
-            colour += penumbra_f3(m) * texture_at(m.w, s).rgb;
+            var emission = penumbra_f3(m) * texture_at(m.w, s).rgb;
+            // KHR_materials_unlit: the colour emitted is also the vertex
+            // colour's (surface_maps.wgsl, texel 3's z).
+            if penumbra_HAS_COLOURS && penumbra_surface_map(object, 3u).z != 0u {
+                emission *= vertex_colour.rgb;
+            }
+            colour += emission;
         }
     } else {
         colour = penumbra_radiance[slot].xyz;
+    }
+    // glTF's occlusionTexture, for the environment's light only (glTF 2.0,
+    // material.occlusionTexture: "applies to indirect lighting"): the
+    // factor 1 + strength × (R − 1), R linear (surface_maps.wgsl, texel 3).
+    var occlusion = 1.0;
+    if penumbra_HAS_OCCLUSION {
+        let m = penumbra_surface_map(object, 3u);
+        if m.x != penumbra_NO_TEXTURE {
+            occlusion = 1.0 + bitcast<f32>(m.y) * (texture_at(m.x, s).r - 1.0);
+        }
     }
     let base = slot * push.sample_count;
     // The chunk's samples light by light: lights in scene order, each
@@ -246,13 +266,23 @@ fn penumbra_shade_stage(
         let end = min(light_end, chunk_end);
         if first < end {
             let diffuse = textureLoad(penumbra_light_colours, penumbra_texel(3u * i));
+            // The environment's samples (its ambient texel's w is 1) take
+            // the occlusion factor, the other lights' none.
+            var scale = 1.0;
+            if penumbra_HAS_OCCLUSION && textureLoad(penumbra_light_colours, penumbra_texel(3u * i + 2u)).w != 0u {
+                scale = occlusion;
+            }
             for (var k = first; k < end; k++) {
                 let e = base + k - push.sample_first;
                 let sample = textureLoad(penumbra_queue, penumbra_texel(e * penumbra_QUEUE_TEXELS));
                 let falloff = bitcast<f32>(sample.w);
                 if falloff > 0.0 {
                     let l = LightSample(penumbra_f3(sample), falloff * bitcast<f32>(diffuse.w), penumbra_f3(diffuse), penumbra_f3(specular));
-                    colour += shade(s, l, p);
+                    if penumbra_HAS_OCCLUSION {
+                        colour += scale * shade(s, l, p);
+                    } else {
+                        colour += shade(s, l, p);
+                    }
                 }
             }
         }

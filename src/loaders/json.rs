@@ -1429,7 +1429,7 @@ impl Reader<'_> {
                         }
                     };
                     let mut maps = gm.maps;
-                    if let Some((t, _)) = &mut maps.normal {
+                    for (t, _) in maps.normal.iter_mut().chain(&mut maps.occlusion) {
                         t.texture += offset;
                     }
                     moved(&mut maps.emission_texture);

@@ -155,6 +155,7 @@ pub fn shade(
         hit.geometric_normal,
     );
     let mut colour = DVec3::ZERO;
+    let mut occlusion = 1.0;
     // (base colour, metallic, roughness) after the textures, in f64.
     let mut pbr_f64 = node.pbr.map(|m| {
         (
@@ -196,7 +197,17 @@ pub fn shade(
         }
         let object = super::surface::object_of(world, hit.kind, hit.index) as usize;
         let maps = &world.objects[object].maps;
-        colour += maps.emission.as_dvec3() * tex(&maps.emission_texture);
+        let mut emission = maps.emission.as_dvec3() * tex(&maps.emission_texture);
+        // KHR_materials_unlit: the vertex colour scales the colour emitted.
+        if maps.emission_by_colour {
+            emission *= s.colour.truncate();
+        }
+        colour += emission;
+        // glTF's occlusionTexture: 1 + strength × (R − 1), for the
+        // environment's light only (as shaders/stages/shade.wgsl).
+        if let Some((t, strength)) = &maps.occlusion {
+            occlusion = 1.0 + *strength as f64 * (s.sample(world, t).x - 1.0);
+        }
     }
     let n = hit.shading_normal;
     let v = -ray.dir;
@@ -204,6 +215,11 @@ pub fn shade(
     for (i, light) in world.lights.iter().enumerate() {
         colour += node.ambient * light.ambient;
         let count = light.samples;
+        let scale = match light.kind {
+            super::lights::Kind::Environment { .. } => occlusion,
+            _ => 1.0,
+        };
+        let start = colour;
         for j in 0..count {
             let uv = sample_2d(
                 world.sampler,
@@ -247,6 +263,9 @@ pub fn shade(
             };
             colour += ls.falloff
                 * (node.diffuse * light.diffuse * ln + node.specular * light.specular * lobe);
+        }
+        if scale != 1.0 {
+            colour = start + scale * (colour - start);
         }
     }
     colour

@@ -645,8 +645,9 @@ pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPS
 /// away; without checkers the shade stage reads a hit's leaf shader from the
 /// shader table instead of a resolved texel; without planes, spheres,
 /// attributes and textures the hit records have no texel 4 to load
-/// (`record_coords` in `shaders/stages/records.wgsl`).
-pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
+/// (`record_coords` in `shaders/stages/records.wgsl`); without occlusion
+/// the environment's samples are not scaled.
+pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 8] {
     [
         ("penumbra_HAS_TEXTURES", f.textures),
         ("penumbra_HAS_ATTRIBUTES", f.attributes),
@@ -655,6 +656,7 @@ pub fn shade_override_values(f: &Features) -> [(&'static str, bool); 7] {
         ("penumbra_HAS_CHECKER", f.checker),
         ("penumbra_HAS_PLANES", f.planes),
         ("penumbra_HAS_SPHERES", f.spheres),
+        ("penumbra_HAS_OCCLUSION", f.occlusion),
     ]
 }
 
@@ -845,7 +847,8 @@ mod tests {
                 3 => f.emission = true,
                 4 => f.checker = true,
                 5 => f.planes = true,
-                _ => f.spheres = true,
+                6 => f.spheres = true,
+                _ => f.occlusion = true,
             }
             let on: Vec<&str> = shade_override_values(&f)
                 .into_iter()
@@ -853,7 +856,10 @@ mod tests {
                 .map(|(n, _)| n)
                 .collect();
             assert_eq!(on, [*name]);
-            if !matches!(*name, "penumbra_HAS_COLOURS" | "penumbra_HAS_EMISSION") {
+            if !matches!(
+                *name,
+                "penumbra_HAS_COLOURS" | "penumbra_HAS_EMISSION" | "penumbra_HAS_OCCLUSION"
+            ) {
                 assert_eq!(engine(&f), [name.strip_prefix("penumbra_").unwrap()]);
             }
             // shade::variant keeps the feature, so pipelines of scenes that
@@ -888,6 +894,7 @@ mod tests {
             normal_maps: true,
             alpha_tests: true,
             single_sided: true,
+            occlusion: true,
         };
         for accel in [Accel::Bvh, Accel::BruteForce] {
             for triangle_test in [

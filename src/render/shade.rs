@@ -35,6 +35,7 @@ pub fn variant(f: &Features) -> Features {
         checker: f.checker,
         planes: f.planes,
         spheres: f.spheres,
+        occlusion: f.occlusion,
         ..Features::default()
     }
 }

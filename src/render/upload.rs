@@ -419,9 +419,10 @@ fn set_leaves(nodes: &mut [layout::ShaderNode], materials: &Materials) {
 }
 
 /// Each light's colours for the shade stage, three texels a light:
-/// (diffuse, intensity), (specular, sample count), (ambient, 0), as bits
-/// (the count as an integer: the shade stage finds each queued sample's
-/// light from it).
+/// (diffuse, intensity), (specular, sample count), (ambient, environment),
+/// as bits (the count as an integer: the shade stage finds each queued
+/// sample's light from it; environment is 1 for the environment, whose
+/// samples an occlusion texture scales, 0 for the others).
 fn light_colours(lights: &[layout::Light]) -> Vec<[u32; 4]> {
     let bits = |c: [f32; 3], w: u32| [c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), w];
     lights
@@ -430,7 +431,7 @@ fn light_colours(lights: &[layout::Light]) -> Vec<[u32; 4]> {
             [
                 bits(l.diffuse, l.intensity.to_bits()),
                 bits(l.specular, l.samples),
-                bits(l.ambient, 0),
+                bits(l.ambient, u32::from(l.kind == layout::LIGHT_ENVIRONMENT)),
             ]
         })
         .collect()

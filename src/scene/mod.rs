@@ -126,6 +126,9 @@ pub struct Features {
     pub emission: bool,
     /// Some object has a normal map.
     pub normal_maps: bool,
+    /// Some object has an occlusion texture and some light is the
+    /// environment: the shade stage scales the environment's samples.
+    pub occlusion: bool,
     /// Some object is masked or blended: traversal tests alpha.
     pub alpha_tests: bool,
     /// Some triangle is single-sided: camera rays skip its back face.
@@ -187,6 +190,11 @@ impl Scene {
             .iter()
             .any(|o| o.maps.emission != glam::Vec3::ZERO || o.maps.emission_texture.is_some());
         f.normal_maps = self.objects.iter().any(|o| o.maps.normal.is_some());
+        f.occlusion = self.objects.iter().any(|o| o.maps.occlusion.is_some())
+            && self
+                .lights
+                .iter()
+                .any(|l| matches!(l.kind, LightKind::Environment { .. }));
         f.alpha_tests = self
             .objects
             .iter()
@@ -261,6 +269,7 @@ impl Scene {
             add(&o.maps.normal.map(|(t, _)| t));
             add(&o.maps.emission_texture);
             add(&o.maps.opacity_texture);
+            add(&o.maps.occlusion.map(|(t, _)| t));
         }
         uses
     }

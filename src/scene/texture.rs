@@ -450,6 +450,15 @@ pub struct SurfaceMaps {
     /// (glTF 2.0, 3.9.5 "Double Sided"); shadow rays do not: a closed
     /// single-sided mesh still casts its shadow.
     pub double_sided: bool,
+    /// glTF `occlusionTexture` and its `strength` in [0, 1]: the light of
+    /// the environment (and only of it: glTF 2.0, material.occlusionTexture
+    /// is for indirect light) is scaled by `1 + strength × (R − 1)`, R the
+    /// texture's red channel (linear).
+    pub occlusion: Option<(TextureRef, f32)>,
+    /// The emission is also scaled by the vertex colour (`COLOR_0`'s RGB):
+    /// KHR_materials_unlit's colour is base colour × texture × vertex
+    /// colour, and penumbra emits it.
+    pub emission_by_colour: bool,
 }
 
 impl Default for SurfaceMaps {
@@ -468,6 +477,8 @@ impl SurfaceMaps {
         opacity: 1.0,
         opacity_texture: None,
         double_sided: true,
+        occlusion: None,
+        emission_by_colour: false,
     };
 
     /// Whether any map, emission or alpha is in use.
@@ -476,6 +487,7 @@ impl SurfaceMaps {
             && self.emission == glam::Vec3::ZERO
             && self.emission_texture.is_none()
             && self.alpha_mode == AlphaMode::Opaque
+            && self.occlusion.is_none()
     }
 }
 

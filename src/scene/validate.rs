@@ -518,6 +518,15 @@ fn maps(i: usize, m: &SurfaceMaps, shape: &Shape, nt: usize) -> Result<(), Inval
     if let Some(t) = &m.opacity_texture {
         texture_ref(&f("opacity_texture"), t, nt)?;
     }
+    if let Some((t, strength)) = &m.occlusion {
+        texture_ref(&f("occlusion"), t, nt)?;
+        if !(0.0..=1.0).contains(strength) {
+            return Err(Invalid::new(
+                f("occlusion.strength"),
+                format!("must be in [0, 1], got {strength}"),
+            ));
+        }
+    }
     if m.alpha_mode != AlphaMode::Opaque && matches!(shape, Shape::Plane(_) | Shape::Sphere(_)) {
         return Err(Invalid::new(
             f("alpha_mode"),
@@ -682,6 +691,8 @@ mod tests {
                     opacity: 1.0,
                     opacity_texture: Some(t),
                     double_sided: true,
+                    occlusion: Some((t, 1.0)),
+                    emission_by_colour: false,
                 },
             }],
             lights: vec![],
@@ -785,6 +796,9 @@ mod tests {
         refused("objects[0].maps.opacity_texture.texture", |s| {
             s.objects[0].maps.opacity_texture = Some(TextureRef::new(1));
         });
+        refused("objects[0].maps.occlusion.texture", |s| {
+            s.objects[0].maps.occlusion = Some((TextureRef::new(1), 1.0));
+        });
         // No textures at all: index 0 is out of range too.
         refused("shaders[0].textures.ambient.texture", |s| {
             s.textures.clear()
@@ -863,6 +877,11 @@ mod tests {
         refused("objects[0].maps.opacity", |s| {
             s.objects[0].maps.opacity = f32::NAN;
         });
+        for strength in [1.5, -0.1, f32::NAN] {
+            refused("objects[0].maps.occlusion.strength", move |s| {
+                s.objects[0].maps.occlusion = Some((TextureRef::new(0), strength));
+            });
+        }
         refused("objects[0].maps.alpha_mode.cutoff", |s| {
             s.objects[0].maps.alpha_mode = AlphaMode::Mask {
                 cutoff: f32::INFINITY,

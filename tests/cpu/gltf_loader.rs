@@ -1455,7 +1455,7 @@ fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
           "alphaMode": "BLEND" },
         { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0 } },
         { "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0 },
-          "alphaMode": "MASK", "occlusionTexture": { "index": 0 } }
+          "alphaMode": "MASK", "occlusionTexture": { "index": 0, "strength": 0.5 } }
     ]));
     // Texture 1 shows the same image as texture 0, as a normal map.
     doc.root["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 0 }]);
@@ -1546,6 +1546,21 @@ fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
         scene.objects[3].maps.alpha_mode,
         AlphaMode::Mask { cutoff: 0.5 }
     );
+    // The occlusion texture: the image in linear space (texture 1, as the
+    // normal map's), with its sampler and strength; none elsewhere.
+    assert_eq!(
+        scene.objects[3].maps.occlusion,
+        Some((
+            TextureRef {
+                sampler,
+                ..TextureRef::new(1)
+            },
+            0.5
+        ))
+    );
+    assert!(scene.objects[..3]
+        .iter()
+        .all(|o| o.maps.occlusion.is_none()));
     // Materials 1 to 3 are the same Phong shader; their maps differ.
     let ids: Vec<_> = scene.objects.iter().map(|o| o.shader).collect();
     assert_eq!(ids, vec![0, 1, 1, 1]);
@@ -1576,11 +1591,7 @@ fn materials_give_phong_textures_normal_maps_emission_and_alpha() {
         1,
         "{notes:?}"
     );
-    assert_eq!(
-        notes_with(notes, "occlusionTexture is not applied"),
-        1,
-        "{notes:?}"
-    );
+    assert_eq!(notes_with(notes, "occlusionTexture"), 0, "{notes:?}");
     assert_eq!(notes_with(notes, "metallic-roughness"), 0, "{notes:?}");
     assert_eq!(notes_with(notes, "KHR_texture_transform"), 0, "{notes:?}");
     assert_eq!(notes_with(notes, "emissive_strength"), 0, "{notes:?}");
@@ -1757,6 +1768,25 @@ fn texture_coordinate_sets_and_colours_of_every_accessor_type() {
     );
 }
 
+/// KHR_materials_unlit: the colour is base colour × texture × vertex
+/// colour, so an unlit material's emission is scaled by COLOR_0; other
+/// materials' emission is not.
+#[test]
+fn unlit_materials_emit_by_vertex_colour() {
+    let mut doc = material_doc(json!([
+        { "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.25, 1, 1] },
+          "extensions": { "KHR_materials_unlit": {} } },
+        { "emissiveFactor": [1, 0.5, 0] }
+    ]));
+    doc.root["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    let scene = load_doc(&doc, &LoadOptions::default()).scene;
+    let (unlit, lit) = (&scene.objects[0].maps, &scene.objects[1].maps);
+    assert_eq!(unlit.emission, Vec3::new(0.5, 0.25, 1.0));
+    assert!(unlit.emission_by_colour);
+    assert_eq!(lit.emission, Vec3::new(1.0, 0.5, 0.0));
+    assert!(!lit.emission_by_colour);
+}
+
 #[test]
 fn tangents_follow_the_node_transform_and_mirroring_flips_their_sign() {
     let mut doc = material_doc(json!([{ "normalTexture": { "index": 0 } }]));
@@ -1916,6 +1946,20 @@ fn bad_images_and_texture_references_name_the_file_and_field() {
         json!({ "alphaMode": "MASK", "alphaCutoff": -1 }),
     );
     message(&doc, "materials[0].alphaCutoff");
+    for strength in [1.5, -0.5] {
+        let doc = with(
+            "/materials/0/occlusionTexture",
+            json!({ "index": 0, "strength": strength }),
+        );
+        message(&doc, "materials[0].occlusionTexture.strength");
+    }
+    let doc = with("/materials/0/occlusionTexture", json!({ "index": 3 }));
+    message(&doc, "materials[0].occlusionTexture.index");
+    let doc = with(
+        "/materials/0/occlusionTexture",
+        json!({ "index": 0, "texCoord": 2 }),
+    );
+    message(&doc, "materials[0].occlusionTexture.texCoord");
 
     // The texels are charged to the memory budget before they are decoded.
     let doc = with("/images/0/uri", json!(png_uri(1024, 1024)));

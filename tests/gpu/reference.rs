@@ -359,6 +359,37 @@ fn metallic_roughness_matches_the_gpu() {
 /// images agree as on the other scenes; seen through a perspective and an
 /// orthographic camera (the eye direction is per pixel in one, the view
 /// direction in the other).
+/// glTF's occlusionTexture, scaling the environment's light and not the
+/// point light's: the reference applies the same factor.
+#[test]
+fn occlusion_matches_the_gpu() {
+    for strength in [1.0, 0.5] {
+        let scene = crate::occlusion::scene(crate::occlusion::Lights::Both, Some(strength));
+        gpu_vs_reference(
+            &format!("occlusion, strength {strength}"),
+            &scene,
+            KernelOptions::default(),
+            Sampling::default(),
+        );
+    }
+}
+
+/// KHR_materials_unlit's vertex colours: the reference scales the emission
+/// by them as the GPU does, and only where the maps say so.
+#[test]
+fn unlit_vertex_colours_match_the_gpu() {
+    for by_colour in [true, false] {
+        let scene = crate::unlit_colours::scene(by_colour);
+        let (g, _) = gpu_vs_reference(
+            &format!("unlit colours {by_colour}"),
+            &scene,
+            KernelOptions::default(),
+            Sampling::default(),
+        );
+        assert!(g.image.pixels.iter().any(|p| p[2] > 0.1));
+    }
+}
+
 #[test]
 fn environment_matches_the_gpu() {
     environment_chart_vs_reference("environment", r#""fov": 45"#);

@@ -43,10 +43,11 @@ pub(super) struct Material {
     pub phong: Phong,
     /// glTF's own model.
     pub pbr: MetallicRoughness,
-    /// Normal map, emission and alpha.
+    /// Normal map, emission, alpha and occlusion.
     pub maps: SurfaceMaps,
-    /// KHR_materials_unlit: the base colour (factor × texture) is the
-    /// colour, lights do not shade it (`maps.emission` holds it).
+    /// KHR_materials_unlit: the base colour (factor × texture × `COLOR_0`)
+    /// is the colour, lights do not shade it (`maps.emission` holds it,
+    /// `maps.emission_by_colour` is set).
     pub unlit: bool,
     /// KHR_materials_pbrSpecularGlossiness, which replaces `pbr` where given.
     pub specular_glossiness: Option<SpecularGlossiness>,
@@ -131,7 +132,32 @@ impl Reader<'_> {
         self.flags.metallic_roughness |= pbr.metallic_factor() != 0.0
             || pbr.roughness_factor() != 1.0
             || pbr.metallic_roughness_texture().is_some();
-        self.flags.occlusion |= material.occlusion_texture().is_some();
+        // glTF 2.0, material.occlusionTexture: R channel, linear, strength
+        // in [0, 1] (default 1); it scales the environment's light only.
+        let occlusion = match material.occlusion_texture() {
+            Some(o) => {
+                let field = f("occlusionTexture");
+                let strength = o.strength();
+                if !(0.0..=1.0).contains(&strength) {
+                    let message = format!("must be in [0, 1], got {strength}");
+                    return self.fail(format!("{field}.strength"), message);
+                }
+                let (transform, set) = self.raw_transform(m, "occlusionTexture", &field)?;
+                let texture = self.texture(&o.texture(), false, &field)?;
+                let (tex_coord, at) = match set {
+                    Some(k) => (
+                        k,
+                        format!("{field}.extensions.KHR_texture_transform.texCoord"),
+                    ),
+                    None => (o.tex_coord(), format!("{field}.texCoord")),
+                };
+                Some((
+                    self.texture_ref(texture, tex_coord, transform, &at)?,
+                    strength,
+                ))
+            }
+            None => None,
+        };
 
         let base_texture = match pbr.base_color_texture() {
             Some(info) => {
@@ -146,7 +172,7 @@ impl Reader<'_> {
                 if !scale.is_finite() {
                     return self.fail(format!("{field}.scale"), "must be finite");
                 }
-                let (transform, set) = self.raw_transform(m, &field)?;
+                let (transform, set) = self.raw_transform(m, "normalTexture", &field)?;
                 let texture = self.texture(&n.texture(), false, &field)?;
                 let (tex_coord, at) = match set {
                     Some(k) => (
@@ -216,6 +242,9 @@ impl Reader<'_> {
             // glTF 2.0, material.doubleSided (default false): back faces of
             // a single-sided material are culled.
             double_sided: material.double_sided(),
+            occlusion,
+            // KHR_materials_unlit: base colour × texture × vertex colour.
+            emission_by_colour: unlit,
         };
         let phong = Phong {
             textures: crate::scene::PhongTextures {
@@ -354,16 +383,22 @@ impl Reader<'_> {
         raw["materials"][m]["extensions"][name].is_object()
     }
 
-    /// KHR_texture_transform of `materials[m].normalTexture`, which the
-    /// `gltf` crate does not expose: read from the JSON itself, with its
-    /// `texCoord`, which overrides the normalTexture's.
-    fn raw_transform(&mut self, m: usize, field: &str) -> Result<(UvTransform, Option<u32>)> {
+    /// KHR_texture_transform of `materials[m].<key>` (`normalTexture` or
+    /// `occlusionTexture`), which the `gltf` crate does not expose: read
+    /// from the JSON itself, with its `texCoord`, which overrides the
+    /// texture info's.
+    fn raw_transform(
+        &mut self,
+        m: usize,
+        key: &str,
+        field: &str,
+    ) -> Result<(UvTransform, Option<u32>)> {
         if self.raw.is_none() {
             let value = serde_json::from_slice(self.json).unwrap_or(serde_json::Value::Null);
             self.raw = Some(value);
         }
         let raw = self.raw.as_ref().expect("parsed above");
-        let ext = &raw["materials"][m]["normalTexture"]["extensions"]["KHR_texture_transform"];
+        let ext = &raw["materials"][m][key]["extensions"]["KHR_texture_transform"];
         if ext.is_null() {
             return Ok((UvTransform::default(), None));
         }

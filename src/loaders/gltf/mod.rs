@@ -413,9 +413,6 @@ fn walk(
     if f.metallic_roughness {
         notes.push(format!("{file}: {METALLIC_ROUGHNESS_NOTE}"));
     }
-    if f.occlusion {
-        notes.push(format!("{file}: occlusionTexture is not applied"));
-    }
     let mut ignored: Vec<&str> = Vec::new();
     for e in document.extensions_used() {
         if !extensions::supported(e) && !ignored.contains(&e) {
@@ -626,7 +623,6 @@ struct Flags {
     /// The file uses KHR_mesh_quantization: integer vertex attributes.
     quantized: bool,
     metallic_roughness: bool,
-    occlusion: bool,
     ranged: bool,
 }
 

@@ -12,7 +12,7 @@ use crate::scene::{Scene, Shape};
 /// Texels per texture use (`penumbra_USE_TEXELS`).
 pub const USE_TEXELS: usize = 3;
 /// Texels per object's surface maps (`penumbra_SURFACE_MAP_TEXELS`).
-pub const SURFACE_MAP_TEXELS: usize = 3;
+pub const SURFACE_MAP_TEXELS: usize = 4;
 /// Texels per triangle's vertex attributes (`penumbra_ATTRIBUTE_TEXELS`).
 pub const ATTRIBUTE_TEXELS: usize = 9;
 /// Texture use index meaning "no texture" (`penumbra_NO_TEXTURE`).
@@ -257,6 +257,10 @@ impl GpuTextures {
                 Some((t, s)) => (Scene::texture_use_index(&uses, t), *s),
                 None => (NO_TEXTURE, 1.0),
             };
+            let (occlusion, strength) = match &m.occlusion {
+                Some((t, s)) => (Scene::texture_use_index(&uses, t), *s),
+                None => (NO_TEXTURE, 0.0),
+            };
             g.surface_maps.extend([
                 [
                     f(m.emission.x),
@@ -271,6 +275,7 @@ impl GpuTextures {
                     u32::from(!m.double_sided),
                     0,
                 ],
+                [occlusion, f(strength), u32::from(m.emission_by_colour), 0],
             ]);
         }
         if scene.features().attributes {
