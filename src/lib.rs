@@ -28,6 +28,7 @@
 
 pub mod brdf;
 pub mod bvh;
+pub mod calibration;
 pub mod error;
 pub mod farm;
 pub mod frame;
