@@ -288,7 +288,7 @@ pub fn cache_dir(bits: u32, var: impl Fn(&str) -> Option<OsString>) -> Option<Pa
     let base = var(CACHE_VARIABLE)
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
-        .or_else(|| crate::calibration::wisdom::user_cache_dir(&var))?;
+        .or_else(|| crate::user_cache::user_cache_dir(&var))?;
     let ours = |p: &Path| {
         p.file_name()
             .is_some_and(|n| n.to_string_lossy().starts_with(CACHE_PREFIX))

@@ -132,17 +132,11 @@ impl Wisdom {
     }
 }
 
-/// The user's cache directory: `$XDG_CACHE_HOME`, else `$HOME/.cache` (the
-/// XDG base directory rule, as Mesa's own cache follows it); `None` without
-/// either. `var` reads the environment.
-pub fn user_cache_dir(var: impl Fn(&str) -> Option<OsString>) -> Option<PathBuf> {
-    let nonempty = |k: &str| var(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    nonempty("XDG_CACHE_HOME").or_else(|| nonempty("HOME").map(|h| h.join(".cache")))
-}
+pub use crate::user_cache::user_cache_dir;
 
 /// The calibration file: `penumbra/calibration.json` in [`user_cache_dir`].
 pub fn path(var: impl Fn(&str) -> Option<OsString>) -> Option<PathBuf> {
-    user_cache_dir(var).map(|d| d.join("penumbra").join(FILE_NAME))
+    crate::user_cache::penumbra_dir(var).map(|d| d.join(FILE_NAME))
 }
 
 /// This machine's CPU, from the text of `/proc/cpuinfo`: vendor, family,

@@ -2,8 +2,8 @@
 //! (each in a child process: `penumbra calibrate --probe CANDIDATE`, since
 //! Mesa reads its variables when the driver loads) and remembers them in the
 //! user's cache directory (src/calibration). A long `render` with no
-//! calibration runs it first by itself; short renders and `watch` use the one
-//! remembered, if any, and never measure.
+//! calibration runs it by itself once the render is done; short renders and
+//! `watch` use the one remembered, if any, and never measure.
 
 use std::io::Read as _;
 use std::path::PathBuf;
@@ -125,21 +125,33 @@ fn cpu_for(fake: &Option<Fake>, cpu: CpuVectors) -> CpuVectors {
     }
 }
 
-/// The settings of a render or `watch`, chosen before the driver loads, and
-/// the calibration they came from (to check its driver against the device's).
+/// The settings of a render or `watch`, chosen before the driver loads, the
+/// calibration they came from (to check its driver against the device's),
+/// and the calibration still to run after the render, if any.
 pub struct Settings {
     /// What was chosen and why.
     pub choice: Choice,
     /// The calibration used, and its file.
     used: Option<(Entry, PathBuf)>,
     fake_driver: Option<String>,
+    /// A long render with no calibration: what [`Settings::calibrate_if_due`] measures.
+    due: Option<Due>,
+}
+
+/// A calibration to run after the render.
+struct Due {
+    candidates: Vec<Candidate>,
+    device: Option<DeviceSelector>,
+    path: PathBuf,
+    fake: Option<Fake>,
 }
 
 /// Chooses lavapipe's settings for `job` and puts them in the environment
 /// (call it before the Vulkan driver loads). The user's flag and variables
-/// win; else this machine's calibration; where there is none and
-/// `may_calibrate` and the job is long, it calibrates first (stating so on
-/// stderr).
+/// win; else this machine's calibration; where there is none, the default,
+/// and if `may_calibrate` and the job is long, the calibration is due after
+/// the render ([`Settings::calibrate_if_due`]): a render that fails (bad
+/// input) never pays for it, and the render is not held up by it.
 pub fn settings(
     request: Request,
     job: Job,
@@ -151,42 +163,25 @@ pub fn settings(
         || std::env::var_os(vector_width::VARIABLE).is_some()
         || std::env::var_os(CAPS_VARIABLE).is_some();
     let cpu = cpu_for(&fake, CpuVectors::detect());
-    let candidates = match &fake {
+    let candidates: Vec<Candidate> = match &fake {
         Some(f) => f.times.iter().map(|(c, _)| *c).collect(),
         None => calibration::candidates(cpu),
     };
-    let path = wisdom_path().ok();
     let mut used = None;
-    if !user_set && !candidates.is_empty() {
-        if let Some(path) = path {
-            let key_cpu = key_cpu(fake.as_ref());
-            let found = read_wisdom(&path)
-                .find(&key_cpu, &wisdom::this_kernel())
-                .cloned();
-            used = match found {
-                Some(e) => Some((e, path)),
-                None if may_calibrate && job.is_long() => {
-                    eprintln!(
-                        "note: calibrating lavapipe on this machine for long renders (once, at most {} s; remembered in {})",
-                        CAP.as_secs(),
-                        terminal::escape(&path.display().to_string())
-                    );
-                    match measure(&candidates, device, fake.as_ref()) {
-                        Ok((e, _)) => {
-                            remember(&path, e.clone())?;
-                            Some((e, path))
-                        }
-                        Err(e) => {
-                            eprintln!(
-                                "note: calibration failed, default settings: {}",
-                                terminal::diagnostic(&format!("{e:#}"))
-                            );
-                            None
-                        }
-                    }
-                }
-                None => None,
-            };
+    let mut due = None;
+    if let (false, false, Ok(path)) = (user_set, candidates.is_empty(), wisdom_path()) {
+        let key_cpu = key_cpu(fake.as_ref());
+        match read_wisdom(&path).find(&key_cpu, &wisdom::this_kernel()) {
+            Some(e) => used = Some((e.clone(), path)),
+            None if may_calibrate && job.is_long() => {
+                due = Some(Due {
+                    candidates,
+                    device: device.cloned(),
+                    path,
+                    fake: fake.clone(),
+                })
+            }
+            None => {}
         }
     }
     let measured = used.as_ref().map(|(e, _)| e.measured.as_slice());
@@ -195,10 +190,33 @@ pub fn settings(
         choice,
         used,
         fake_driver: fake.map(|f| f.driver),
+        due,
     })
 }
 
 impl Settings {
+    /// After a successful long render with no calibration of this machine:
+    /// calibrates now (saying so on stderr) for the renders after it. A
+    /// failure is a note: the render itself succeeded.
+    pub fn calibrate_if_due(&self) {
+        let Some(due) = &self.due else {
+            return;
+        };
+        eprintln!(
+            "note: calibrating lavapipe on this machine for the long renders after this one (once, at most {} s; remembered in {})",
+            CAP.as_secs(),
+            terminal::escape(&due.path.display().to_string())
+        );
+        let done = measure(&due.candidates, due.device.as_ref(), due.fake.as_ref())
+            .and_then(|(e, _)| remember(&due.path, e));
+        if let Err(e) = done {
+            eprintln!(
+                "note: calibration failed: {}",
+                terminal::diagnostic(&format!("{e:#}"))
+            );
+        }
+    }
+
     /// After the device is made: a calibration made with another driver is
     /// stale (the settings it chose stay for this run): it is dropped from
     /// the file with a note, and the next long render or `penumbra
@@ -466,6 +484,7 @@ fn run_probe(name: &str, device: Option<DeviceSelector>) -> anyhow::Result<()> {
 }
 
 /// The fake measurement of [`FAKE_VARIABLE`].
+#[derive(Clone)]
 struct Fake {
     cpu: String,
     driver: String,

@@ -105,10 +105,10 @@ impl Home {
         (line, stderr)
     }
 
-    /// A long render (64 passes at the assumed 1024x1024) that stops at once
-    /// after choosing its settings: its output's extension is refused, after
-    /// the calibration and before the driver loads. Returns stderr.
-    fn long_render_stopping_early(&self, fake: &str) -> String {
+    /// A long render (64 passes at the assumed 1024x1024) that fails at once
+    /// after choosing its settings (its output's extension is refused): bad
+    /// input, one `error:` line and nothing else. Returns stderr.
+    fn long_render_failing(&self, fake: &str) -> String {
         let o = self.run(
             &[
                 "render",
@@ -123,10 +123,19 @@ impl Home {
         );
         let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
         assert!(!o.status.success(), "{stderr}");
-        let errors: Vec<_> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
-        assert_eq!(errors.len(), 1, "{stderr}");
-        assert!(errors[0].contains("out.txt"), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains("out.txt"),
+            "{stderr}"
+        );
         stderr
+    }
+
+    /// A long render that succeeds: 96x54 at 16384 passes is past 2^26
+    /// primary rays, and a time budget of 5 s (which keeps a render long)
+    /// ends it. Its summary line and stderr.
+    fn long_render(&self, fake: &str) -> (String, String) {
+        self.short_render(fake, &["--spp", "16384", "--time-budget", "5"], &[])
     }
 
     fn wisdom(&self) -> Wisdom {
@@ -196,20 +205,29 @@ fn calibrate_measures_prints_and_remembers() {
 }
 
 #[test]
-fn a_long_render_calibrates_once_and_renders_with_the_choice() {
+fn a_long_render_calibrates_after_itself_and_the_next_one_uses_it() {
     let home = Home::new();
     let fake = home.fake("cpu A", "Mesa 1");
-    let stderr = home.long_render_stopping_early(&fake);
+    let (line, stderr) = home.long_render(&fake);
     assert!(
-        stderr.contains("note: calibrating lavapipe on this machine"),
+        line.ends_with(
+            " | vector width 256 (auto: AVX-512, not calibrated; `penumbra calibrate` measures)"
+        ),
+        "{line}"
+    );
+    assert!(
+        stderr.contains(
+            "note: calibrating lavapipe on this machine for the long renders after this one"
+        ),
         "{stderr}"
     );
     assert_eq!(home.probes(), PROBES);
     assert!(home.file().exists());
-    // The second long render reads the file: no probe. It renders at 512 bits
-    // (the device's name says so): 96x54 at 16384 passes is past 2^26 primary rays, and a 5 s budget keeps it long.
-    let (line, _) = home.short_render(&fake, &["--spp", "16384", "--time-budget", "5"], &[]);
+    // The second long render reads the file (no probe) and renders at 512
+    // bits (the device's name says so).
+    let (line, stderr) = home.long_render(&fake);
     assert_eq!(home.probes(), PROBES, "the second run measured again");
+    assert!(!stderr.contains("calibrating"), "{stderr}");
     assert!(
         line.ends_with(
             " | vector width 512 (calibrated on this machine: 1.25x the default's speed)"
@@ -220,6 +238,14 @@ fn a_long_render_calibrates_once_and_renders_with_the_choice() {
         line.contains(", 512 bits)"),
         "the driver did not get it: {line}"
     );
+}
+
+#[test]
+fn a_long_render_that_fails_does_not_calibrate() {
+    let home = Home::new();
+    home.long_render_failing(&home.fake("cpu A", "Mesa 1"));
+    assert_eq!(home.probes(), 0);
+    assert!(!home.file().exists());
 }
 
 #[test]
@@ -248,15 +274,17 @@ fn short_renders_never_calibrate_and_use_the_remembered_choice() {
 #[test]
 fn another_cpu_recalibrates_and_keeps_both() {
     let home = Home::new();
-    home.long_render_stopping_early(&home.fake("cpu A", "Mesa 1"));
-    home.long_render_stopping_early(&home.fake("cpu A", "Mesa 1"));
+    assert!(home
+        .run(&["calibrate"], &home.fake("cpu A", "Mesa 1"), &[])
+        .status
+        .success());
     assert_eq!(home.probes(), PROBES);
-    home.long_render_stopping_early(&home.fake("cpu B", "Mesa 1"));
-    assert_eq!(
-        home.probes(),
-        2 * PROBES,
-        "another CPU used the first one's calibration"
+    let (line, _) = home.long_render(&home.fake("cpu B", "Mesa 1"));
+    assert!(
+        line.contains("not calibrated"),
+        "cpu A's calibration used for cpu B: {line}"
     );
+    assert_eq!(home.probes(), 2 * PROBES, "cpu B was not calibrated");
     let cpus: Vec<String> = home
         .wisdom()
         .entries
@@ -269,17 +297,23 @@ fn another_cpu_recalibrates_and_keeps_both() {
 #[test]
 fn another_driver_forgets_the_calibration() {
     let home = Home::new();
-    home.long_render_stopping_early(&home.fake("cpu A", "Mesa 1"));
+    assert!(home
+        .run(&["calibrate"], &home.fake("cpu A", "Mesa 1"), &[])
+        .status
+        .success());
     let (line, stderr) = home.short_render(&home.fake("cpu A", "Mesa 2"), &[], &[]);
     assert!(
         stderr.contains("calibrated with driver `Mesa 1`, this is `Mesa 2`: forgotten"),
         "{stderr}"
     );
     assert!(line.contains("calibrated on this machine"), "{line}");
-    assert!(home.wisdom().entries.is_empty());
-    home.long_render_stopping_early(&home.fake("cpu A", "Mesa 2"));
-    assert_eq!(home.probes(), 2 * PROBES, "the new driver was not measured");
-    assert_eq!(home.wisdom().entries[0].key.driver, "Mesa 2");
+    assert!(
+        home.wisdom().entries.is_empty(),
+        "so the next long render calibrates"
+    );
+    let (line, stderr) = home.short_render(&home.fake("cpu A", "Mesa 2"), &[], &[]);
+    assert!(line.contains("not calibrated"), "{line}");
+    assert!(!stderr.contains("forgotten"), "{stderr}");
 }
 
 #[test]
@@ -309,23 +343,34 @@ fn the_users_flag_and_variables_win_over_the_calibration() {
 
 #[test]
 fn a_corrupt_or_foreign_file_is_noted_and_replaced() {
-    for text in [
+    let texts = [
         "{\"format\": \"penumbra calibration\", \"version\": 99, \"entries\": []}",
         "not json \u{1b}[31m",
         "",
-    ] {
+    ];
+    for (i, text) in texts.iter().enumerate() {
         let home = Home::new();
         std::fs::create_dir_all(home.file().parent().unwrap()).unwrap();
         std::fs::write(home.file(), text).unwrap();
-        let stderr = home.long_render_stopping_early(&home.fake("cpu A", "Mesa 1"));
+        let fake = home.fake("cpu A", "Mesa 1");
+        // A short render: one note, the default, no measurement.
+        let (line, stderr) = home.short_render(&fake, &[], &[]);
         let notes: Vec<_> = stderr
             .lines()
             .filter(|l| l.contains("not a calibration of this version"))
             .collect();
         assert_eq!(notes.len(), 1, "{stderr}");
         assert!(!notes[0].contains('\u{1b}'), "unescaped: {stderr}");
-        assert_eq!(home.probes(), PROBES, "{text}: not recalibrated");
-        assert_eq!(home.wisdom().entries.len(), 1);
+        assert!(line.contains("not calibrated"), "{line}");
+        assert_eq!(home.probes(), 0);
+        // A long render (once: it takes 5 s): one note, and it recalibrates.
+        if i == 0 {
+            let (_, stderr) = home.long_render(&fake);
+            let notes = stderr.matches("not a calibration of this version").count();
+            assert_eq!(notes, 1, "{stderr}");
+            assert_eq!(home.probes(), PROBES, "{text}: not recalibrated");
+            assert_eq!(home.wisdom().entries.len(), 1);
+        }
     }
 }
 

@@ -80,6 +80,10 @@ pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
         );
         exit_leaving_the_device(1);
     }
+    if failed.is_empty() {
+        drop(renderer);
+        lavapipe.calibrate_if_due();
+    }
     if !failed.is_empty() {
         anyhow::bail!(
             "{}: {} of {total} scenes failed: {}",

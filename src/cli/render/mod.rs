@@ -105,8 +105,8 @@ pub struct RenderArgs {
     #[arg(long)]
     aov: Option<output::AovSet>,
     /// lavapipe's SIMD width in bits: `auto` takes what `penumbra calibrate`
-    /// measured fastest on this machine (a long render calibrates first),
-    /// else 256 on any CPU with AVX; LP_NATIVE_VECTOR_WIDTH in the
+    /// measured fastest on this machine (a long render without calibration
+    /// calibrates after it), else 256 on any CPU with AVX; LP_NATIVE_VECTOR_WIDTH in the
     /// environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
@@ -210,7 +210,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         part::check(&args, &out)?;
     }
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
-    // A long render with no calibration of this machine calibrates first.
+    // A long render with no calibration of this machine calibrates after it.
     let settings = match args.reference {
         true => None,
         false => Some(calibrate::settings(
@@ -237,13 +237,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if let (Some(s), Some(r)) = (&settings, &renderer) {
         s.check_driver(r.device());
     }
-    let vector_width = settings.map(|s| s.choice);
+    let vector_width = settings.as_ref().map(|s| s.choice.clone());
     let (loaded, load) = load(&scene, &args, renderer.as_ref())?;
     match renderer.as_mut() {
         None => reference::run(&scene, &loaded.scene, &args, &out, load),
         Some(r) if args.is_part() => part::run(r, &scene, &loaded, &args, &out, load),
         Some(r) => render_image(r, &scene, &loaded, &args, &out, load, vector_width),
+    }?;
+    // The device is closed before the calibration's probes open their own.
+    drop(renderer);
+    if let Some(s) = settings {
+        s.calibrate_if_due();
     }
+    Ok(())
 }
 
 /// Loads the scene within the device's limits, prints the loader's notes and

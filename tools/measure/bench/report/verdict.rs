@@ -76,7 +76,7 @@ pub fn wide_vectors(avx512: bool, speedup: f64) -> &'static str {
 
 /// What `--vector-width auto` does: the calibration's choice (src/calibration).
 pub fn auto_rule() -> &'static str {
-    "takes the setting that `penumbra calibrate` measured fastest on the machine, a long render calibrating first (512 bits for long renders only, AVX2 or AVX-512 code at 256 bits; docs/drivers.md, \"Calibration\", gives each candidate's speed on a machine), and 256 bits where nothing was measured"
+    "takes the setting that `penumbra calibrate` measured fastest on the machine, the first long render calibrating after itself (512 bits for long renders only, AVX2 or AVX-512 code at 256 bits; docs/drivers.md, \"Calibration\", gives each candidate's speed on a machine), and 256 bits where nothing was measured"
 }
 
 /// Whether this CPU has what auto would use 512 bits on.
