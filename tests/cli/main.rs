@@ -22,6 +22,7 @@ mod gltf_materials;
 mod gltf_render;
 mod json_textures;
 mod metrics;
+mod pipeline_cache;
 mod setup_script;
 mod vector_width;
 mod watch;

@@ -78,7 +78,7 @@ fn auto_says_its_choice_and_the_driver_uses_it() {
         assert!(line.contains(&format!(", {bits} bits)")), "{line}");
     }
     assert!(
-        !dir.path().join("xdg/penumbra").exists(),
+        !dir.path().join("xdg/penumbra/calibration.json").exists(),
         "a short render calibrated"
     );
 }
