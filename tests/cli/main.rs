@@ -12,6 +12,7 @@ mod watch_support;
 mod area_light_input;
 mod bad_input;
 mod calibrate;
+mod default_lighting;
 mod docs_flags;
 mod environment;
 mod escaping;

@@ -16,9 +16,12 @@ pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
     let lavapipe = calibrate::settings(args.vector_width, args.job(), args.device.as_ref(), true)?;
     let settings = BatchSettings {
-        load: args.limits.load_options(args.width, args.height),
+        load: args
+            .limits
+            .load_options(args.width, args.height, args.lighting),
         sampling: args.sampling(),
         area_samples: args.area_samples,
+        display: args.display.display(),
     };
     let t0 = Instant::now();
     if !dir.is_dir() {
