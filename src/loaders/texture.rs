@@ -1,5 +1,6 @@
 //! Texture images: PNG or JPEG bytes (a file, a glTF bufferView or a
-//! `data:` URI) decoded with the `image` crate into a [`Texture`].
+//! `data:` URI) decoded with the `image` crate into a [`Texture`], or a
+//! glTF file's KTX2/Basis Universal image ([`super::ktx2`]).
 //!
 //! Decoding is bounded before it allocates: the decoder reads the header
 //! alone first, and its size is checked against [`MAX_TEXTURE_SIDE`], the
@@ -48,7 +49,8 @@ pub fn decode(
 #[derive(Debug)]
 pub struct Pending {
     bytes: Vec<u8>,
-    format: ImageFormat,
+    /// `None` for a KTX2 image.
+    format: Option<ImageFormat>,
     label: String,
     srgb: bool,
     /// The decoder's output, bytes, from the header.
@@ -68,6 +70,9 @@ pub fn prepare(
     srgb: bool,
     guard: &Guard,
 ) -> Result<Pending, Refused> {
+    if super::ktx2::is_ktx2(&bytes) || mime == Some(super::ktx2::MIME) {
+        return prepare_ktx2(bytes, mime, label, srgb, guard);
+    }
     let format = format_of(&bytes, mime)?;
     let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
     let mut reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
@@ -93,7 +98,7 @@ pub fn prepare(
     drop(decoder);
     Ok(Pending {
         bytes,
-        format,
+        format: Some(format),
         label: label.to_string(),
         srgb,
         decoded,
@@ -101,10 +106,64 @@ pub fn prepare(
     })
 }
 
+/// [`prepare`] for a KTX2 image: its header's size is checked and charged
+/// as a PNG's would be; the transcoder's output is the RGBA8 texels.
+fn prepare_ktx2(
+    bytes: Vec<u8>,
+    mime: Option<&str>,
+    label: &str,
+    srgb: bool,
+    guard: &Guard,
+) -> Result<Pending, Refused> {
+    use super::ktx2;
+    if !ktx2::is_ktx2(&bytes) {
+        return Err(Refused(format!(
+            "declares mimeType {:?} but is not a KTX2 file",
+            ktx2::MIME
+        )));
+    }
+    if let Some(m) = mime.filter(|&m| m != ktx2::MIME) {
+        return Err(Refused(format!(
+            "declares mimeType {m:?} but holds a KTX2 image"
+        )));
+    }
+    let (width, height) = ktx2::dimensions(&bytes)?;
+    if width == 0 || height == 0 {
+        return Err(Refused(format!("is an empty image ({width}×{height})")));
+    }
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(Refused(format!(
+            "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
+        )));
+    }
+    // The transcoder's output is the RGBA8 image, then copied into texels.
+    let decoded = u64::from(width) * u64::from(height) * 4;
+    let (_, kept) = texture_bytes(width, height, decoded);
+    guard.charge_texture(width, height, decoded, kept)?;
+    Ok(Pending {
+        bytes,
+        format: None,
+        label: label.to_string(),
+        srgb,
+        decoded,
+        transient: decoded,
+    })
+}
+
 impl Pending {
     /// Decodes the image, within the limits its header set.
     pub fn decode(self) -> Result<Texture, Refused> {
-        let format = self.format;
+        let Some(format) = self.format else {
+            let (width, height) = super::ktx2::dimensions(&self.bytes)?;
+            return Ok(Texture {
+                texels: super::ktx2::decode(&self.bytes, width, height)?,
+                label: self.label,
+                file: None,
+                width,
+                height,
+                srgb: self.srgb,
+            });
+        };
         let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
         let mut reader = image::ImageReader::with_format(Cursor::new(&self.bytes[..]), format);
         let mut header = image::Limits::default();
