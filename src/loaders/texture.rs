@@ -83,14 +83,7 @@ pub fn prepare(
     reader.limits(header);
     let decoder = reader.into_decoder().map_err(corrupt)?;
     let (width, height) = decoder.dimensions();
-    if width == 0 || height == 0 {
-        return Err(Refused(format!("is an empty image ({width}×{height})")));
-    }
-    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
-        return Err(Refused(format!(
-            "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
-        )));
-    }
+    check_size(width, height)?;
     let decoded = decoder.total_bytes();
     let (transient, kept) = texture_bytes(width, height, decoded);
     guard.charge_texture(width, height, transient, kept)?;
@@ -104,6 +97,20 @@ pub fn prepare(
         decoded,
         transient,
     })
+}
+
+/// Refuses an empty image, or one larger than [`MAX_TEXTURE_SIDE`], from
+/// the size its header gives.
+fn check_size(width: u32, height: u32) -> Result<(), Refused> {
+    if width == 0 || height == 0 {
+        return Err(Refused(format!("is an empty image ({width}×{height})")));
+    }
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(Refused(format!(
+            "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
+        )));
+    }
+    Ok(())
 }
 
 /// [`prepare`] for a KTX2 image: its header's size is checked and charged
@@ -128,14 +135,7 @@ fn prepare_ktx2(
         )));
     }
     let (width, height) = ktx2::dimensions(&bytes)?;
-    if width == 0 || height == 0 {
-        return Err(Refused(format!("is an empty image ({width}×{height})")));
-    }
-    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
-        return Err(Refused(format!(
-            "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
-        )));
-    }
+    check_size(width, height)?;
     // The transcoder's output is the RGBA8 image, then copied into texels.
     let decoded = u64::from(width) * u64::from(height) * 4;
     let (_, kept) = texture_bytes(width, height, decoded);
