@@ -17,11 +17,13 @@
 //! ```
 
 use crate::frame::Image;
+use crate::output::Format;
 
 /// The tone mapping of `--tonemap`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ToneMap {
-    /// None: the PNG encoder clamps to [0, 1] (the default).
+    /// None: the PNG encoder clamps to [0, 1] (the default for scenes with
+    /// lights of their own).
     #[default]
     None,
     /// Khronos PBR Neutral.
@@ -38,6 +40,53 @@ impl std::str::FromStr for ToneMap {
             "pbr-neutral" => Ok(ToneMap::PbrNeutral),
             _ => Err("expected `none` or `pbr-neutral`".into()),
         }
+    }
+}
+
+impl std::fmt::Display for ToneMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ToneMap::None => "none",
+            ToneMap::PbrNeutral => "pbr-neutral",
+        })
+    }
+}
+
+/// How an image is shown in a PNG file: `--exposure` and `--tonemap`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Display {
+    /// Stops: linear values are scaled by `2^exposure`.
+    pub exposure: f32,
+    /// The tone mapping asked for; `None`: the scene's default
+    /// ([`Display::tonemap_for`]).
+    pub tonemap: Option<ToneMap>,
+}
+
+impl Display {
+    /// The tone mapping of a scene: the one asked for, else PBR Neutral for a
+    /// scene lit by the default environment (shown as model viewers show
+    /// models) and none for a scene with lights of its own (its contract).
+    pub fn tonemap_for(&self, lit_by_default: bool) -> ToneMap {
+        self.tonemap.unwrap_or(match lit_by_default {
+            true => ToneMap::PbrNeutral,
+            false => ToneMap::None,
+        })
+    }
+
+    /// `image` as a file of `format` holds it: exposed and tone-mapped in a
+    /// PNG file, linear and untouched in an EXR file (borrowed when nothing
+    /// changes).
+    pub fn for_format<'a>(
+        &self,
+        image: &'a Image,
+        format: Format,
+        lit_by_default: bool,
+    ) -> std::borrow::Cow<'a, Image> {
+        let tonemap = self.tonemap_for(lit_by_default);
+        if format == Format::Exr || (self.exposure == 0.0 && tonemap == ToneMap::None) {
+            return std::borrow::Cow::Borrowed(image);
+        }
+        std::borrow::Cow::Owned(apply(image, self.exposure, tonemap))
     }
 }
 
@@ -69,11 +118,7 @@ pub fn apply(image: &Image, exposure: f32, tonemap: ToneMap) -> Image {
         .pixels
         .iter()
         .map(|p| {
-            let c = [p[0] * scale, p[1] * scale, p[2] * scale];
-            let c = match tonemap {
-                ToneMap::None => c,
-                ToneMap::PbrNeutral => pbr_neutral(c.map(|v| v.max(0.0))),
-            };
+            let c = map([p[0], p[1], p[2]], scale, tonemap);
             [c[0], c[1], c[2], p[3]]
         })
         .collect();
@@ -81,6 +126,15 @@ pub fn apply(image: &Image, exposure: f32, tonemap: ToneMap) -> Image {
         width: image.width,
         height: image.height,
         pixels,
+    }
+}
+
+/// One linear colour scaled by `scale` (`2^exposure`) and tone mapped.
+pub fn map(c: [f32; 3], scale: f32, tonemap: ToneMap) -> [f32; 3] {
+    let c = c.map(|v| v * scale);
+    match tonemap {
+        ToneMap::None => c,
+        ToneMap::PbrNeutral => pbr_neutral(c.map(|v| v.max(0.0))),
     }
 }
 

@@ -7,6 +7,7 @@ use penumbra::loaders::{self, LoadOptions};
 use penumbra::output;
 use penumbra::render::{KernelOptions, ShaderSource};
 
+use super::look::{DisplayArgs, LightingArgs};
 use super::{ms, side_parser, spp_parser};
 
 #[derive(clap::Subcommand)]
@@ -61,6 +62,10 @@ pub struct SlurmArgs {
     /// invalid, then the merge; wait and report as --submit does.
     #[arg(long, conflicts_with = "submit")]
     resume: bool,
+    #[command(flatten)]
+    lighting: LightingArgs,
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 impl FarmCommand {
@@ -99,7 +104,7 @@ fn slurm(a: SlurmArgs) -> anyhow::Result<()> {
         }
         (None, None) => anyhow::bail!("farm slurm: a SCENE or --batch LIST is needed"),
     };
-    let job = slurm::Job {
+    let mut job = slurm::Job {
         work,
         out: a.output.clone(),
         spp: a.spp,
@@ -108,7 +113,13 @@ fn slurm(a: SlurmArgs) -> anyhow::Result<()> {
         height: a.height,
         partition: a.partition.clone(),
         time: a.time.clone(),
+        render_flags: a.lighting.forwarded(),
+        merge_flags: Vec::new(),
     };
+    if let slurm::Work::Batch { .. } = job.work {
+        // A batch's renders write the images themselves.
+        job.render_flags.extend(a.display.forwarded());
+    }
     // Check the split against the scene now, not in every task.
     let mut render_id = None;
     if let slurm::Work::Split {
@@ -129,9 +140,12 @@ fn slurm(a: SlurmArgs) -> anyhow::Result<()> {
             &LoadOptions {
                 width: a.width,
                 height: a.height,
+                lighting: a.lighting.lighting(),
                 ..Default::default()
             },
         )?;
+        // The merge knows no scene: it gets the scene's tone mapping.
+        job.merge_flags = a.display.forwarded_to_merge(loaded.lit_by_default);
         let cam = &loaded.scene.camera;
         split::Tile {
             index: 0,
@@ -146,6 +160,8 @@ fn slurm(a: SlurmArgs) -> anyhow::Result<()> {
             seed: a.seed,
             area_samples: None,
             kernel: KernelOptions::default(),
+            lighting: a.lighting.lighting(),
+            gltf_materials: Default::default(),
         };
         render_id = Some(identity::render_id(
             &loaded.files,

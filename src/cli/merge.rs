@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use super::look::DisplayArgs;
 use super::ms;
 
 #[derive(clap::Args)]
@@ -13,12 +14,14 @@ pub struct MergeArgs {
     /// The merged image (.png or .exr), written atomically.
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 pub fn run(args: MergeArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let plan = penumbra::farm::merge::plan(&args.parts)?;
-    penumbra::farm::merge::write(&plan, &args.output)?;
+    penumbra::farm::merge::write(&plan, &args.output, args.display.display())?;
     println!(
         "merged {} parts ({} tiles, {} passes) into {} ({}x{}) in {}",
         args.parts.len(),

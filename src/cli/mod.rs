@@ -6,6 +6,7 @@
 mod devices;
 mod diff;
 mod farm;
+mod look;
 mod merge;
 mod render;
 mod watch;
@@ -99,11 +100,17 @@ struct LimitArgs {
 }
 
 impl LimitArgs {
-    /// Load options with these limits and the size overrides.
-    fn load_options(self, width: Option<u32>, height: Option<u32>) -> LoadOptions {
+    /// Load options with these limits, the size overrides and the lighting flags.
+    fn load_options(
+        self,
+        width: Option<u32>,
+        height: Option<u32>,
+        lighting: look::LightingArgs,
+    ) -> LoadOptions {
         LoadOptions {
             width,
             height,
+            lighting: lighting.lighting(),
             restrict_paths: self.restrict_paths,
             max_scene_bytes: self.max_scene_memory << 20,
             gltf_materials: self.gltf_materials,

@@ -11,6 +11,7 @@ use penumbra::render::{KernelOptions, ShaderSource};
 use penumbra::vector_width;
 use penumbra::vulkan::DeviceSelector;
 
+use super::look::{DisplayArgs, LightingArgs};
 use super::{exit_leaving_the_device, renderer_options, side_parser, LimitArgs, Seconds};
 
 #[derive(clap::Args)]
@@ -61,6 +62,10 @@ pub struct WatchArgs {
     time_limit: Seconds,
     #[command(flatten)]
     limits: LimitArgs,
+    #[command(flatten)]
+    lighting: LightingArgs,
+    #[command(flatten)]
+    display: DisplayArgs,
 }
 
 pub fn run(args: WatchArgs) -> anyhow::Result<()> {
@@ -84,7 +89,10 @@ pub fn run(args: WatchArgs) -> anyhow::Result<()> {
         KernelOptions::default(),
         args.time_limit,
     );
-    opts.load = args.limits.load_options(args.width, args.height);
+    opts.load = args
+        .limits
+        .load_options(args.width, args.height, args.lighting);
+    opts.display = args.display.display();
     opts.serve = args.serve;
     opts.preview_divisor = args.preview;
     opts.debounce = Duration::from_millis(args.debounce_ms);

@@ -127,6 +127,8 @@ pub struct BatchSettings {
     pub sampling: Sampling,
     /// `--area-samples`, when given.
     pub area_samples: Option<u32>,
+    /// `--exposure` and `--tonemap` of PNG outputs.
+    pub display: crate::tonemap::Display,
 }
 
 /// Renders one entry with `renderer` (whose kernel cache the whole batch
@@ -140,6 +142,7 @@ pub fn render_entry(
     load.max_triangles = renderer.max_triangles();
     load.max_texture_bytes = renderer.texture_capacity();
     let loaded = loaders::load_scene(&entry.scene, &load)?;
+    let lit_by_default = loaded.lit_by_default;
     let mut scene = loaded.scene;
     if let Some(n) = settings.area_samples {
         for l in &mut scene.lights {
@@ -157,7 +160,11 @@ pub fn render_entry(
         )
         .map(|r| r.frame)
         .map_err(|e| scene_error(&entry.scene, e))?;
-    crate::output::write_image(&entry.output, &frame.image)?;
+    let format = crate::output::Format::from_path(&entry.output)?;
+    let image = settings
+        .display
+        .for_format(&frame.image, format, lit_by_default);
+    crate::output::write_image(&entry.output, &image)?;
     Ok(())
 }
 

@@ -25,6 +25,10 @@ pub struct RenderSettings {
     pub area_samples: Option<u32>,
     /// Acceleration structure, triangle test, sampler.
     pub kernel: KernelOptions,
+    /// `--environment` and `--background`.
+    pub lighting: crate::loaders::lighting::Lighting,
+    /// `--gltf-materials`.
+    pub gltf_materials: crate::loaders::GltfMaterials,
 }
 
 /// Why an identity could not be computed.
@@ -95,6 +99,8 @@ mod tests {
             seed: 0,
             area_samples: None,
             kernel: KernelOptions::default(),
+            lighting: Default::default(),
+            gltf_materials: Default::default(),
         };
         let before = render_id(&[], &shaders, &settings).unwrap();
         assert_eq!(

@@ -18,6 +18,7 @@ use std::sync::Mutex;
 use super::part::{self, PartInfo};
 use super::split::Passes;
 use crate::output::Format;
+use crate::tonemap::{self, Display};
 
 /// A checked set of parts: for each tile, its parts in pass order.
 #[derive(Debug)]
@@ -241,11 +242,13 @@ impl TileCursor<'_> {
     }
 }
 
-/// Merges a checked plan into `out` (.png: sRGB 8 bit; .exr: linear float
-/// RGB), streaming tile by tile, written atomically: on any error (a part
+/// Merges a checked plan into `out` (.png: sRGB 8 bit with `display`'s
+/// exposure and tone mapping; .exr: linear float RGB), streaming tile by tile, written atomically: on any error (a part
 /// that turns out truncated) nothing is left at `out`.
-pub fn write(plan: &Plan, out: &Path) -> anyhow::Result<()> {
+pub fn write(plan: &Plan, out: &Path, display: Display) -> anyhow::Result<()> {
     let format = crate::output::check_writable(out)?;
+    // A merge knows no scene: the tone mapping asked for, else none.
+    let (scale, tonemap) = (display.exposure.exp2(), display.tonemap_for(false));
     let mut cursor = TileCursor {
         plan,
         current: None,
@@ -254,7 +257,7 @@ pub fn write(plan: &Plan, out: &Path) -> anyhow::Result<()> {
         Format::Png => crate::output::encode_png_rows(file, plan.width, plan.height, |y, buf| {
             let row = cursor.row(y)?;
             for (o, p) in buf.chunks_exact_mut(3).zip(row) {
-                o.copy_from_slice(&p.map(crate::output::srgb8));
+                o.copy_from_slice(&tonemap::map(*p, scale, tonemap).map(crate::output::srgb8));
             }
             Ok(())
         }),

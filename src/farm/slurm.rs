@@ -58,6 +58,11 @@ pub struct Job {
     pub partition: Option<String>,
     /// `--time`, when given (Slurm's time format).
     pub time: Option<String>,
+    /// More flags for every render, one argument each (`--environment=2`):
+    /// what changes the image beyond size, passes and seed.
+    pub render_flags: Vec<String>,
+    /// Flags for the merge (`--tonemap=pbr-neutral`), one argument each.
+    pub merge_flags: Vec<String>,
 }
 
 /// Quotes a string for bash (single quotes).
@@ -115,6 +120,8 @@ impl Job {
         if let Some(h) = self.height {
             render_args.push(format!("--height {h}"));
         }
+        render_args.extend(self.render_flags.iter().map(|f| quote(f)));
+        let merge_args: Vec<String> = self.merge_flags.iter().map(|f| quote(f)).collect();
         let mut sbatch_args = Vec::new();
         if let Some(p) = &self.partition {
             sbatch_args.push(quote(&format!("--partition={p}")));
@@ -140,7 +147,7 @@ impl Job {
   local parts=() i start rc=0
   start=$(date +%s.%N)
   for ((i = 0; i < tasks; i++)); do parts+=("$(part "$i")"); done
-  "$penumbra" merge "${parts[@]}" -o "$out" || rc=$?
+  "$penumbra" merge "${parts[@]}" "${merge_args[@]}" -o "$out" || rc=$?
   echo "$start $(date +%s.%N) $rc" > "$work/logs/merge.time"
   return "$rc"
 }
@@ -192,6 +199,7 @@ work={work_q}
 {vars}tasks={tasks}
 spp={spp}
 render_args=({render_args})
+merge_args=({merge_args})
 sbatch_args=({sbatch_args})
 
 part() {{ echo "$work/parts/part-$1.exr"; }}
@@ -232,6 +240,7 @@ esac
             work_q = quote(&work),
             spp = self.spp,
             render_args = render_args.join(" "),
+            merge_args = merge_args.join(" "),
             sbatch_args = sbatch_args.join(" "),
         )
     }
@@ -402,6 +411,8 @@ mod tests {
             height: None,
             partition: Some("gpu".into()),
             time: Some("00:10:00".into()),
+            render_flags: vec!["--environment=2".into()],
+            merge_flags: vec!["--tonemap=pbr-neutral".into()],
         }
     }
 
@@ -452,6 +463,13 @@ mod tests {
             "{s}"
         );
         assert!(s.contains("tasks=24"));
+        // Every render and the merge get the flags that change the image.
+        assert!(s.contains("render_args=(--spp 64 --seed 3 --width 640 '--environment=2')"));
+        assert!(s.contains("merge_args=('--tonemap=pbr-neutral')"));
+        assert!(
+            s.contains(r#"merge "${parts[@]}" "${merge_args[@]}" -o"#),
+            "{s}"
+        );
         assert!(!batch.script().contains("merge) merge"));
         assert_eq!(
             split.task_part(5),

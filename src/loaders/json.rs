@@ -1586,6 +1586,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
         },
         notes: Vec::new(),
         files,
+        lit_by_default: false,
     };
     for (i, o) in file.objects.iter().enumerate() {
         r.object(i, o, &ids, base, &guard, &mut loaded)?;
@@ -1596,5 +1597,6 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded, SceneError> {
         .enumerate()
         .map(|(i, l)| r.light(i, l))
         .collect::<Result<Vec<_>, _>>()?;
+    super::lighting::apply(&mut loaded, &opts.lighting);
     Ok(loaded)
 }

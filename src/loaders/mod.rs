@@ -6,6 +6,7 @@ pub mod gltf;
 pub mod guard;
 pub mod json;
 pub mod ktx2;
+pub mod lighting;
 pub mod texture;
 
 use std::path::{Path, PathBuf};
@@ -36,6 +37,8 @@ pub struct LoadOptions {
     pub gltf_materials: GltfMaterials,
     /// Which of a glTF file's cameras to render from (`--camera`).
     pub camera: gltf::CameraChoice,
+    /// `--environment` and `--background`.
+    pub lighting: lighting::Lighting,
 }
 
 /// The shader of a glTF file's materials (`--gltf-materials`).
@@ -73,6 +76,7 @@ impl Default for LoadOptions {
             max_texture_bytes: u64::MAX,
             camera: gltf::CameraChoice::File,
             gltf_materials: GltfMaterials::default(),
+            lighting: lighting::Lighting::default(),
         }
     }
 }
@@ -88,6 +92,10 @@ pub struct Loaded {
     /// Every file that was read: the scene file first, then referenced
     /// files (glTF, buffers). A watcher reloads when any of them changes.
     pub files: Vec<PathBuf>,
+    /// The file has no lights and the loader lit it with the default
+    /// environment ([`lighting::light_by_default`]): shown tone-mapped as
+    /// viewers show models.
+    pub lit_by_default: bool,
 }
 
 /// Loads a `.json`, `.gltf` or `.glb` scene.

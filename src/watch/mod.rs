@@ -40,6 +40,7 @@ use crate::loaders::LoadOptions;
 use crate::output::{self, Durability, Format};
 use crate::render::compile::SHADER_FILES;
 use crate::render::{Renderer, RendererOptions, ShaderSource};
+use crate::tonemap::Display;
 use files::{normalise, FileWatcher, WatchSet};
 use stage::{Changes, CompileTimes, Session, StageFrame};
 
@@ -58,8 +59,10 @@ pub struct WatchOptions {
     /// The renderer: device, validation, kernel variant, and where the WGSL
     /// comes from (a directory is watched; embedded shaders are not).
     pub renderer: RendererOptions,
-    /// Image size overrides.
+    /// Image size overrides, limits and lighting flags.
     pub load: LoadOptions,
+    /// `--exposure` and `--tonemap` of PNG output and the live page.
+    pub display: Display,
     /// Serve the live page here.
     pub serve: Option<SocketAddr>,
     /// The preview's resolution divisor (1: no preview stage).
@@ -86,6 +89,7 @@ impl WatchOptions {
                 ..RendererOptions::default()
             },
             load: LoadOptions::default(),
+            display: Display::default(),
             serve: None,
             preview_divisor: 4,
             debounce: Duration::from_millis(30),
@@ -332,6 +336,7 @@ impl Watch {
             out: Output {
                 path: opts.output.clone(),
                 format,
+                display: opts.display,
                 live: opts.serve.map(|_| live),
             },
             divisors: if opts.preview_divisor > 1 {
@@ -535,11 +540,12 @@ impl Watch {
         let full = self.session.size().unwrap_or((1, 1));
         let mut stages = Vec::new();
         let mut write_errors = Vec::new();
+        let lit_by_default = self.session.lit_by_default();
         let (watcher, out) = (&mut self.watcher, &mut self.out);
         let rendered = self.session.render_stages(
             &self.divisors,
             || watcher.pending(),
-            |frame: StageFrame| match out.write(&frame, full) {
+            |frame: StageFrame| match out.write(&frame, full, lit_by_default) {
                 Ok((encode, write)) => {
                     let written_at = Instant::now();
                     stages.push(StageReport {
@@ -695,6 +701,7 @@ fn describe(shader_dir: Option<&Path>, p: &Path) -> String {
 struct Output {
     path: PathBuf,
     format: Format,
+    display: Display,
     live: Option<Arc<server::Live>>,
 }
 
@@ -706,9 +713,13 @@ impl Output {
         &mut self,
         frame: &StageFrame,
         full: (u32, u32),
+        lit_by_default: bool,
     ) -> Result<(Duration, Duration), String> {
         let t0 = Instant::now();
-        let image = stage::upscale(&frame.image, full.0, full.1);
+        let linear = stage::upscale(&frame.image, full.0, full.1);
+        let image = self
+            .display
+            .for_format(&linear, self.format, lit_by_default);
         // A preview is overwritten by the next stage: the faster encode.
         let compression = match (frame.image.width, frame.image.height) == full {
             true => png::Compression::Balanced,
@@ -724,7 +735,10 @@ impl Output {
             let png = if self.format == Format::Png {
                 bytes
             } else {
-                output::encode(&image, Format::Png).unwrap_or_default()
+                let shown = self
+                    .display
+                    .for_format(&linear, Format::Png, lit_by_default);
+                output::encode(&shown, Format::Png).unwrap_or_default()
             };
             live.set_image(png);
         }

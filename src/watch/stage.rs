@@ -133,6 +133,9 @@ pub struct Session {
     /// The error of a time-out, once one hung the device
     /// ([`RenderError::is_timeout`]): what `watch` carries over its restart.
     timed_out: Option<String>,
+    /// The last good scene is lit by the default environment
+    /// ([`crate::loaders::Loaded::lit_by_default`]).
+    lit_by_default: bool,
 }
 
 impl Session {
@@ -145,6 +148,7 @@ impl Session {
             scene_path: scene_path.to_path_buf(),
             load,
             uploaded: None,
+            lit_by_default: false,
             scene_files: vec![scene_path.to_path_buf()],
             user_shaders: Vec::new(),
             textures: Vec::new(),
@@ -398,6 +402,7 @@ impl Session {
                 self.user_shaders.sort();
                 self.user_shaders.dedup();
                 self.scene_files = loaded.files;
+                self.lit_by_default = loaded.lit_by_default;
                 self.textures = loaded.scene.textures;
                 self.texture_errors.clear();
                 self.scene_error = None;
@@ -406,6 +411,12 @@ impl Session {
                 true
             }
         }
+    }
+
+    /// Whether the last good scene is lit by the default environment (its
+    /// images are tone-mapped by default).
+    pub fn lit_by_default(&self) -> bool {
+        self.lit_by_default
     }
 
     /// Renders the stages, largest divisor first (e.g. `[4, 1]`: a quarter

@@ -11,6 +11,7 @@ mod watch_support;
 
 mod area_light_input;
 mod bad_input;
+mod default_lighting;
 mod docs_flags;
 mod environment;
 mod escaping;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DVec3, Vec3};
 use penumbra::loaders::gltf::{self, GltfDocument};
-use penumbra::loaders::{LoadOptions, Loaded};
+use penumbra::loaders::{GltfMaterials, LoadOptions, Loaded};
 use penumbra::scene::{LightKind, Projection, Shader, Shape};
 use penumbra::SceneError;
 use serde_json::{json, Value};
@@ -772,10 +772,7 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
             "{notes:?}"
         );
         assert_eq!(
-            notes_with(
-                notes,
-                ": using default lights placed relative to the camera"
-            ),
+            notes_with(notes, ": lit by the default environment"),
             1,
             "{notes:?}"
         );
@@ -816,8 +813,25 @@ fn no_camera_and_no_lights_get_a_framing_camera_and_a_default_light() {
         let (az, el) = (30f64.to_radians(), 20f64.to_radians());
         let from = DVec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos());
         assert_close(cam.orientation.col(2), from, 1e-12);
-        check_default_lights(&loaded.scene);
+        check_default_environment(&loaded);
     }
+}
+
+/// A file without lights under glTF's own materials: the default
+/// environment alone (no shadow rays, so geometry enclosing the scene cannot
+/// block it), over the grey background, shown tone-mapped.
+fn check_default_environment(loaded: &Loaded) {
+    use penumbra::loaders::lighting::{DEFAULT_BACKGROUND, DEFAULT_ENVIRONMENT};
+    let scene = &loaded.scene;
+    assert!(loaded.lit_by_default);
+    assert_eq!(scene.lights.len(), 1, "{:?}", scene.lights);
+    let l = &scene.lights[0];
+    match l.kind {
+        LightKind::Environment { up, .. } => assert_eq!(up, DVec3::Y),
+        k => panic!("{k:?}"),
+    }
+    assert_eq!((l.intensity, l.diffuse), (DEFAULT_ENVIRONMENT, Vec3::ONE));
+    assert_eq!(scene.background, Vec3::from(DEFAULT_BACKGROUND));
 }
 
 /// The default lights follow the camera: a key light travelling along the
@@ -866,11 +880,63 @@ fn a_file_with_a_camera_and_no_lights_is_lit_from_that_camera() {
     );
     // Rotated 180° about X: looks along +Z with up −Y, from z = −5.
     doc.root_node(json!({ "camera": 0, "translation": [0.3, 0.3, -5], "rotation": [1, 0, 0, 0] }));
-    let loaded = load_doc(&doc, &LoadOptions::default());
+    // The seminar's Phong mapping keeps the default lights of before.
+    let phong = LoadOptions {
+        gltf_materials: GltfMaterials::Phong,
+        ..Default::default()
+    };
+    let loaded = load_doc(&doc, &phong);
     assert_close(-loaded.scene.camera.orientation.col(2), DVec3::Z, 1e-12);
     check_default_lights(&loaded.scene);
+    assert!(!loaded.lit_by_default);
+    assert_eq!(loaded.scene.background, Vec3::ZERO);
     assert_eq!(notes_with(&loaded.notes, "relative to the camera"), 1);
     assert_eq!(notes_with(&loaded.notes, "no camera"), 0);
+    // glTF's own materials: the default environment instead.
+    let loaded = load_doc(&doc, &LoadOptions::default());
+    check_default_environment(&loaded);
+    assert_eq!(notes_with(&loaded.notes, "relative to the camera"), 0);
+}
+
+#[test]
+fn the_environment_flag_replaces_the_default_environment_and_joins_a_files_lights() {
+    use penumbra::loaders::lighting::Lighting;
+    let with = |environment, background| LoadOptions {
+        lighting: Lighting {
+            environment,
+            background,
+        },
+        ..Default::default()
+    };
+    // No lights: the asked environment instead of the default one.
+    let doc = triangle_doc(json!({}));
+    let loaded = load_doc(&doc, &with(Some(3.0), Some([0.1, 0.2, 0.3])));
+    assert_eq!(loaded.scene.lights.len(), 1);
+    assert_eq!(loaded.scene.lights[0].intensity, 3.0);
+    assert!(matches!(
+        loaded.scene.lights[0].kind,
+        LightKind::Environment { .. }
+    ));
+    assert_eq!(loaded.scene.background, Vec3::new(0.1, 0.2, 0.3));
+    // A file with a light keeps it and gets the environment beside it.
+    let mut doc = triangle_doc(json!({}));
+    doc.root["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    doc.root["extensions"] =
+        json!({ "KHR_lights_punctual": { "lights": [{ "type": "directional", "intensity": 2 }] } });
+    doc.root_node(json!({ "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    let loaded = load_doc(&doc, &LoadOptions::default());
+    assert_eq!(loaded.scene.lights.len(), 1);
+    assert!(!loaded.lit_by_default);
+    assert_eq!(loaded.scene.background, Vec3::ZERO);
+    let loaded = load_doc(&doc, &with(Some(3.0), None));
+    let kinds: Vec<_> = loaded.scene.lights.iter().map(|l| l.kind).collect();
+    assert!(
+        matches!(
+            kinds[..],
+            [LightKind::Directional { .. }, LightKind::Environment { .. }]
+        ),
+        "{kinds:?}"
+    );
 }
 
 #[test]
@@ -1089,7 +1155,7 @@ fn bunny_glb() {
     assert_eq!(notes_with(&loaded.notes, "no lights in"), 1);
     // Metallic 0 and roughness 1: the diffuse surface Phong draws, no note.
     assert_eq!(loaded.notes.len(), 2, "{:?}", loaded.notes);
-    check_default_lights(&loaded.scene);
+    check_default_environment(&loaded);
     let c = loaded.scene.camera;
     assert_eq!((c.width, c.height), (1024, 768));
     let read = gltf::read(Path::new(BUNNY)).unwrap();

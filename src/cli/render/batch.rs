@@ -17,9 +17,12 @@ pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
     vector_width::apply(args.vector_width, args.job());
     let settings = BatchSettings {
-        load: args.limits.load_options(args.width, args.height),
+        load: args
+            .limits
+            .load_options(args.width, args.height, args.lighting),
         sampling: args.sampling(),
         area_samples: args.area_samples,
+        display: args.display.display(),
     };
     let t0 = Instant::now();
     if !dir.is_dir() {

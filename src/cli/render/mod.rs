@@ -3,7 +3,6 @@
 //! (reference.rs); summary.rs writes the one summary line.
 
 mod batch;
-mod lighting;
 mod part;
 mod reference;
 mod summary;
@@ -21,6 +20,7 @@ use penumbra::terminal;
 use penumbra::vector_width;
 use penumbra::vulkan::DeviceSelector;
 
+use super::look::{DisplayArgs, LightingArgs};
 use super::{parse_seconds, renderer_options, side_parser, spp_parser, LimitArgs, Seconds};
 
 #[derive(clap::Args)]
@@ -32,25 +32,10 @@ pub struct RenderArgs {
     /// out.png. With --batch, the folder the images go to.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Exposure in stops: the PNG output's linear values are scaled by 2^EV
-    /// before tone mapping (EXR output stays linear and untouched).
-    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true,
-          value_parser = parse_exposure)]
-    exposure: f32,
-    /// Tone mapping of the PNG output: `none` (clamp to [0, 1]) or
-    /// `pbr-neutral` (Khronos PBR Neutral; docs/materials.md). EXR output
-    /// stays linear and untouched.
-    #[arg(long, value_name = "MAP", default_value = "none",
-          value_parser = |s: &str| s.parse::<penumbra::tonemap::ToneMap>())]
-    tonemap: penumbra::tonemap::ToneMap,
-    /// Add the environment light of this intensity (a studio sky over a
-    /// darker ground, unshadowed; docs/materials.md, "Environment").
-    #[arg(long, value_name = "INTENSITY", allow_hyphen_values = true,
-          value_parser = lighting::parse_environment)]
-    environment: Option<f32>,
-    /// Colour where camera rays miss, linear R,G,B (default: the scene's).
-    #[arg(long, value_name = "R,G,B", value_parser = lighting::parse_background)]
-    background: Option<[f32; 3]>,
+    #[command(flatten)]
+    lighting: LightingArgs,
+    #[command(flatten)]
+    display: DisplayArgs,
     /// Image width in pixels (overrides the scene's).
     #[arg(long, value_parser = side_parser())]
     width: Option<u32>,
@@ -226,20 +211,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (loaded, load) = load(&scene, &args, renderer.as_ref())?;
     match renderer.as_mut() {
-        None => reference::run(&scene, &loaded.scene, &args, &out, load),
+        None => reference::run(&scene, &loaded, &args, &out, load),
         Some(r) if args.is_part() => part::run(r, &scene, &loaded, &args, &out, load),
         Some(r) => render_image(r, &scene, &loaded, &args, &out, load, vector_width),
     }
 }
 
-/// Loads the scene within the device's limits, prints the loader's notes and
-/// applies `--area-samples`.
+/// Loads the scene within the device's limits and with the lighting flags,
+/// prints the loader's notes and applies `--area-samples`.
 fn load(
     scene: &Path,
     args: &RenderArgs,
     renderer: Option<&Renderer>,
 ) -> anyhow::Result<(Loaded, Duration)> {
-    let mut options = args.limits.load_options(args.width, args.height);
+    let mut options = args
+        .limits
+        .load_options(args.width, args.height, args.lighting);
     if let Some(c) = &args.camera {
         options.camera = loaders::gltf::CameraChoice::parse(c);
     }
@@ -253,7 +240,6 @@ fn load(
     for note in &loaded.notes {
         eprintln!("note: {}", terminal::diagnostic(note));
     }
-    lighting::apply(&mut loaded.scene, args.environment, args.background);
     if let Some(n) = args.area_samples {
         for l in &mut loaded.scene.lights {
             l.kind.set_samples(n);
@@ -283,7 +269,7 @@ fn render_image(
     let t1 = Instant::now();
     match (args.aov, &aovs) {
         (Some(set), Some(a)) => output::write_exr_with_aovs(out, &frame.image, a, set)?,
-        _ => output::write_image(out, &*display(&frame.image, args, out)?)?,
+        _ => write_shown(out, &frame.image, loaded, args)?,
     }
     let write = t1.elapsed();
     println!(
@@ -291,6 +277,21 @@ fn render_image(
         summary::gpu_line(renderer, &loaded.scene, &frame, load, write, vector_width)
     );
     Ok(())
+}
+
+/// Writes `image` to `out` as its format shows it: a PNG exposed and
+/// tone-mapped (`--exposure`, `--tonemap` or the scene's default), an EXR
+/// linear.
+fn write_shown(
+    out: &Path,
+    image: &penumbra::frame::Image,
+    loaded: &Loaded,
+    args: &RenderArgs,
+) -> anyhow::Result<()> {
+    let format = output::Format::from_path(out)?;
+    let display = args.display.display();
+    let shown = display.for_format(image, format, loaded.lit_by_default);
+    Ok(output::write_image(out, &shown)?)
 }
 
 /// A device limit names a scene field: say which file, or which option where
@@ -309,31 +310,4 @@ fn scene_error(e: RenderError, scene: &Path, args: &RenderArgs) -> anyhow::Error
         }
         e => e.into(),
     }
-}
-
-/// `--exposure`: a finite number of stops in [-64, 64].
-fn parse_exposure(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(ev) if ev.is_finite() && (-64.0..=64.0).contains(&ev) => Ok(ev),
-        _ => Err("expected a finite number of stops in [-64, 64]".into()),
-    }
-}
-
-/// The image as written to `out`: a PNG gets `--exposure` and `--tonemap`
-/// (nothing changes at their defaults), an EXR stays linear.
-fn display<'a>(
-    image: &'a penumbra::frame::Image,
-    args: &RenderArgs,
-    out: &Path,
-) -> anyhow::Result<std::borrow::Cow<'a, penumbra::frame::Image>> {
-    use penumbra::tonemap::{apply, ToneMap};
-    let png = output::Format::from_path(out)? == output::Format::Png;
-    if !png || (args.exposure == 0.0 && args.tonemap == ToneMap::None) {
-        return Ok(std::borrow::Cow::Borrowed(image));
-    }
-    Ok(std::borrow::Cow::Owned(apply(
-        image,
-        args.exposure,
-        args.tonemap,
-    )))
 }

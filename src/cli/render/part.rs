@@ -58,6 +58,8 @@ pub fn run(
         seed: args.seed,
         area_samples: args.area_samples,
         kernel: args.kernel(),
+        lighting: args.lighting.lighting(),
+        gltf_materials: args.limits.gltf_materials,
     };
     let render = identity::render_id(&loaded.files, &args.shader_source(), &settings)?;
     let info = part::PartInfo::new(

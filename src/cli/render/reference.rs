@@ -4,18 +4,19 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use penumbra::loaders::Loaded;
 use penumbra::output;
-use penumbra::scene::Scene;
 
-use super::{summary, RenderArgs};
+use super::{summary, write_shown, RenderArgs};
 
 pub fn run(
     file: &Path,
-    scene: &Scene,
+    loaded: &Loaded,
     args: &RenderArgs,
     out: &Path,
     load: Duration,
 ) -> anyhow::Result<()> {
+    let scene = &loaded.scene;
     penumbra::reference::supports(scene)
         .map_err(|why| anyhow::anyhow!("{}: {why}", file.display()))?;
     let (sampling, sampler) = (args.sampling(), args.kernel().sampler);
@@ -28,7 +29,7 @@ pub fn run(
     } else {
         let frame = penumbra::reference::render(scene, &sampling, sampler);
         t1 = Instant::now();
-        output::write_image(out, &frame.image)?;
+        write_shown(out, &frame.image, loaded, args)?;
         frame
     };
     let write = t1.elapsed();

@@ -200,19 +200,23 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         }
     };
     let mut lights = doc.lights;
-    if lights.is_empty() {
+    // Lit by the default environment (pbr) or the default lights (phong).
+    let lit_by_default = lights.is_empty() && pbr;
+    if lit_by_default {
+        notes.push(format!(
+            "no lights in {}: lit by the default environment over a grey background, \
+             tone-mapped with pbr-neutral (docs/materials.md, \"Default lighting\")",
+            path.display()
+        ));
+    } else if lights.is_empty() {
         notes.push(format!(
             "no lights in {}: using default lights placed relative to the camera \
              (a key light over its shoulder and a weaker fill light from it)",
             path.display()
         ));
-        // Under glTF's BRDF a white dielectric reflects about c/π: the
-        // default lights are π times brighter there, so that a diffuse
-        // model is as bright as under the seminar's Phong mapping.
-        let scale = if pbr { std::f32::consts::PI } else { 1.0 };
-        lights.extend(default_lights(&camera, scale));
+        lights.extend(default_lights(&camera));
     }
-    let scene = Scene {
+    let mut scene = Scene {
         textures: doc.textures,
         camera,
         background: Vec3::ZERO,
@@ -220,17 +224,23 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         objects,
         lights,
     };
+    if lit_by_default {
+        super::lighting::light_by_default(&mut scene);
+    }
     // Named by the file's fields here; `load_scene` validates again, finding nothing.
     if let Err(e) = scene.validate() {
         let shader_of: Vec<usize> = scene.objects.iter().map(|o| o.shader).collect();
         let (field, message) = fields::file_field(&e.field, &e.message, &origins, &shader_of);
         return Err(SceneError::new(path, field, message));
     }
-    Ok(Loaded {
+    let mut loaded = Loaded {
         scene,
         notes,
         files: doc.files,
-    })
+        lit_by_default,
+    };
+    super::lighting::apply(&mut loaded, &opts.lighting);
+    Ok(loaded)
 }
 
 /// `--width`/`--height` where given; otherwise derived from the other side and
@@ -264,14 +274,15 @@ pub const DEFAULT_LIGHTS: [(DVec3, f32); 2] = [
 /// White directional lights fixed to the camera ([`DEFAULT_LIGHTS`]), as
 /// model viewers light what they show: wherever the file's camera or the
 /// framing camera looks from, what it sees is lit.
-/// Their intensities are multiplied by `scale`.
-fn default_lights(camera: &Camera, scale: f32) -> [Light; 2] {
+/// `--gltf-materials phong` only: glTF's own materials are lit by the
+/// default environment ([`super::lighting::light_by_default`]).
+fn default_lights(camera: &Camera) -> [Light; 2] {
     let o = camera.orientation;
     DEFAULT_LIGHTS.map(|(d, intensity)| Light {
         kind: LightKind::Directional {
             direction: (o * d).normalize(),
         },
-        intensity: intensity * scale,
+        intensity,
         ambient: Vec3::ZERO,
         diffuse: Vec3::ONE,
         specular: Vec3::ONE,

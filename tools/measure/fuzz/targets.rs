@@ -256,7 +256,8 @@ impl Workspace {
                 result = penumbra::panics::catch(|| {
                     let plan = penumbra::farm::merge::plan(&[path.clone(), other.clone()])
                         .map_err(|e| format!("{e:#}"))?;
-                    penumbra::farm::merge::write(&plan, &out).map_err(|e| format!("{e:#}"))
+                    penumbra::farm::merge::write(&plan, &out, Default::default())
+                        .map_err(|e| format!("{e:#}"))
                 });
             }
             Target::Request => {
