@@ -179,8 +179,10 @@ fn bad_draco_streams_and_extension_objects_name_the_field() {
     );
     let count = draco_error(|j, _| j["accessors"][2]["count"] = json!(2400), &opts);
     assert!(count.contains(&format!("{EXT}.attributes.POSITION: accessors[2] declares 2400 vertices but the Draco stream has 2399")), "{count}");
-    let indices = draco_error(|j, _| j["accessors"][0]["count"] = json!(12633), &opts);
-    assert!(indices.contains("meshes[0].primitives[0].indices: accessors[0] declares 12633 indices but the Draco stream has 4212 triangles"), "{indices}");
+    let indices = draco_error(|j, _| j["accessors"][0]["count"] = json!(12639), &opts);
+    assert!(indices.contains("meshes[0].primitives[0].indices: accessors[0] declares 12639 indices but the Draco stream has 4212 triangles"), "{indices}");
+    let fewer = draco_error(|j, _| j["accessors"][0]["count"] = json!(12633), &opts);
+    assert!(fewer.contains(&format!("{EXT}.bufferView: bufferViews[1] declares 4212 triangles in its Draco header, more than the 4211 its accessors allow (refused before decoding)")), "{fewer}");
     let shape = draco_error(|j, _| j["accessors"][3]["type"] = json!("VEC3"), &opts);
     assert!(shape.contains(&format!("{EXT}.attributes.TEXCOORD_0: accessors[3] has 3 components but Draco attribute 2 has 2")), "{shape}");
     let view = draco_error(
@@ -215,6 +217,23 @@ fn a_draco_primitives_declared_size_is_charged_before_it_is_decoded() {
         "{bomb}"
     );
     assert!(bomb.contains("--max-scene-memory"), "{bomb}");
+    // A stream whose header claims more than its accessors: the Duck's
+    // edgebreaker header (byte 11 the traversal type, then the varint
+    // number of encoded vertices, 2108 in two bytes) made to claim 16383,
+    // more than three per declared triangle; refused before the decoder
+    // allocates by it.
+    let header = draco_error(
+        |j, bin| {
+            let at = j["bufferViews"][1]["byteOffset"].as_u64().unwrap() as usize;
+            assert_eq!(bin[at + 12..at + 14], [0xbc, 0x10], "2108 as a varint");
+            bin[at + 12..at + 14].copy_from_slice(&[0xff, 0x7f]);
+        },
+        &opts,
+    );
+    assert!(
+        header.contains("bufferViews[1] declares 16383 vertices in its Draco header, more than the 12636 its accessors allow (refused before decoding)"),
+        "{header}"
+    );
     // The same budget holds the Duck itself.
     let path = duck("Duck_draco.glb");
     gltf::load(&path, &opts).unwrap_or_else(|e| panic!("{e}"));

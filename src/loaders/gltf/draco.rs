@@ -14,8 +14,10 @@
 //! Attributes the map does not name are read uncompressed as usual.
 //!
 //! What the accessors declare is charged against `--max-scene-memory`
-//! before the stream is decoded, and the decoded mesh must match it
-//! exactly, so a small stream cannot claim more than its file declares.
+//! before the stream is decoded, the counts the stream's header declares
+//! (by which the decoder allocates) may not exceed it ([`check_counts`]),
+//! and the decoded mesh must match it exactly, so a small stream cannot
+//! claim more than its file declares.
 
 use std::collections::HashMap;
 
@@ -139,7 +141,21 @@ pub(super) fn decode(
     stream: &[u8],
 ) -> Result<HashMap<usize, Vec<f64>>, (String, String)> {
     let ext_field = format!("extensions.{NAME}");
-    let mesh = draco_oxide_decoder::decode_mesh(stream).map_err(|e| {
+    let corners = c.filled.iter().find(|f| f.unique_id.is_none());
+    let faces = corners.map_or(0, |f| f.count / 3) as u64;
+    check_counts(stream, faces).map_err(|m| {
+        let message = format!("bufferViews[{}] {m}", c.view);
+        (format!("{ext_field}.bufferView"), message)
+    })?;
+    // The decoder is young (an alpha): a panic of its own on a malformed
+    // stream is reported as this stream's error too.
+    let decoded = crate::panics::catch(|| draco_oxide_decoder::decode_mesh(stream));
+    let mesh = match decoded {
+        Ok(Ok(mesh)) => Ok(mesh),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(format!("the decoder failed ({panic})")),
+    }
+    .map_err(|e| {
         let message = format!("bufferViews[{}] is not a valid Draco mesh: {e}", c.view);
         (format!("{ext_field}.bufferView"), message)
     })?;
@@ -196,6 +212,67 @@ pub(super) fn decode(
         out.insert(f.accessor, values);
     }
     Ok(out)
+}
+
+/// The counts the stream's connectivity header declares, against the
+/// `faces` triangles its `indices` accessor declares (and the memory budget
+/// was charged for): the decoder allocates by these counts before it reads
+/// the data behind them, so a few bytes could otherwise claim terabytes.
+/// From the Draco bitstream specification 2.2 (google/draco,
+/// `docs/spec`): the header is "DRACO", version major and minor, geometry
+/// type, method (0 sequential, 1 edgebreaker) and 16 flag bits (0x8000:
+/// metadata follows); sequential connectivity starts with varints
+/// num_faces and num_points, edgebreaker's with a traversal byte, varints
+/// num_encoded_vertices and num_faces, a byte num_attribute_data, and
+/// varints num_encoded_symbols and num_encoded_split_symbols.
+fn check_counts(stream: &[u8], faces: u64) -> Result<(), String> {
+    let too_short = || "is not a valid Draco mesh: it ends inside its header".to_string();
+    let header = stream.get(..11).ok_or_else(too_short)?;
+    if &header[..5] != b"DRACO" {
+        return Err("is not a valid Draco mesh: it lacks the DRACO magic".into());
+    }
+    if u16::from_le_bytes([header[9], header[10]]) & 0x8000 != 0 {
+        return Err("is a Draco stream with metadata, which penumbra does not read".into());
+    }
+    let mut at = 11;
+    // An unsigned LEB128 number at `at`, which moves past it.
+    let varint = |at: &mut usize| -> Result<u64, String> {
+        let mut value = 0u64;
+        for shift in (0..64).step_by(7) {
+            let byte = *stream.get(*at).ok_or_else(too_short)?;
+            *at += 1;
+            value |= u64::from(byte & 0x7f) << shift;
+            if byte & 0x80 == 0 {
+                return Ok(value);
+            }
+        }
+        Err("is not a valid Draco mesh: a count in its header is longer than 64 bits".into())
+    };
+    let declared = |what: &str, n: u64, most: u64| {
+        match n <= most {
+        true => Ok(()),
+        false => Err(format!(
+            "declares {n} {what} in its Draco header, more than the {most} its accessors allow (refused before decoding)"
+        )),
+    }
+    };
+    match header[8] {
+        0 => {
+            declared("triangles", varint(&mut at)?, faces)?;
+            // Each point is a corner of some triangle.
+            declared("points", varint(&mut at)?, faces.saturating_mul(3))?;
+        }
+        1 => {
+            at += 1; // the traversal decoder's type
+            declared("vertices", varint(&mut at)?, faces.saturating_mul(3))?;
+            declared("triangles", varint(&mut at)?, faces)?;
+            at += 1; // num_attribute_data
+            declared("symbols", varint(&mut at)?, faces)?;
+            declared("split symbols", varint(&mut at)?, faces)?;
+        }
+        _ => {} // The decoder names an unknown method.
+    }
+    Ok(())
 }
 
 /// One value per point, `n` components each, through the attribute's
