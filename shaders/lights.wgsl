@@ -85,23 +85,16 @@ fn light_sample_count(light: Light) -> u32 {
     return 1u;
 }
 
-// Sample `uv` in [0, 1)² of light `light` as seen from `p`. For area lights
-// the falloff includes the 1/N of each of the N point lights.
-fn sample_light(light: Light, p: vec3<f32>, uv: vec2<f32>) -> SampledLight {
+// Sample `uv` in [0, 1)² of light `light` as seen from `p`, a point with
+// unit shading normal `n` seen from the unit direction `v` (towards the eye;
+// only the environment's samples depend on the two: environment.wgsl). For
+// area lights the falloff includes the 1/N of each of the N point lights.
+fn sample_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, uv: vec2<f32>) -> SampledLight {
     if HAS_DIRECTIONAL && light.kind == LIGHT_DIRECTIONAL {
         return SampledLight(-light.direction, FAR, 1.0);
     }
     if HAS_AREA_LIGHTS && light.kind == LIGHT_ENVIRONMENT {
-        // Uniform on the sphere of directions (pdf 1/(4π)): radiance
-        // g(ω·up) over the pdf, 1/N of it per sample. Distance 0: no shadow
-        // ray, the environment is evaluated without visibility
-        // (docs/materials.md, "Environment").
-        let z = 1.0 - 2.0 * uv.x;
-        let r = sqrt(max(0.0, 1.0 - z * z));
-        let phi = 6.283185307 * uv.y;
-        let w = vec3<f32>(r * cos(phi), r * sin(phi), z);
-        let g = light.cone_offset + light.cone_scale * dot(w, light.direction);
-        return SampledLight(w, 0.0, 12.566370614 * g / f32(light.samples));
+        return sample_environment(light, n, v, uv);
     }
     if HAS_AREA_LIGHTS && light.kind >= LIGHT_RECT {
         var x: vec3<f32>;

@@ -66,6 +66,13 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
     let base = slot * push.sample_count;
     let first = push.sample_first;
     let end = first + push.sample_count;
+    // The direction to the eye (the camera sits at the origin): a
+    // perspective ray left it towards the point, an orthographic one along
+    // the view direction (as the shade stage's to_eye).
+    var to_eye = -globals.camera.forward;
+    if globals.camera.orthographic == 0u && start.found {
+        to_eye = -normalize(start.position);
+    }
     // Sample k of the pixel (lights in scene order, each light's samples in
     // turn) is light i's sample j = k - (the samples of the lights before
     // it); the loops visit only the chunk's, first <= k < end.
@@ -98,7 +105,7 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
                 if HAS_AREA_LIGHTS {
                     uv = sample_2d_shifted(shift, pixel, 1u + i, push.pass_index * count + j);
                 }
-                let ls = sample_light(light, start.position, uv);
+                let ls = sample_light(light, start.position, shading_normal, to_eye, uv);
                 if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
                     traced += 1u;
                     if !occluded(start, ls.to_light, ls.distance) {

@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 use super::intersect::FAR;
-use crate::scene::{Light as SceneLight, LightKind};
+use crate::scene::{EnvironmentMixture, Light as SceneLight, LightKind, ENVIRONMENT_MIXTURE};
 
 /// Where a light's samples come from. (Each variant's docs name its
 /// fields.)
@@ -40,8 +40,14 @@ pub enum Kind {
     },
     /// Sphere of point lights (uniform on the surface; not an occluder).
     Sphere { center: DVec3, radius: f64 },
-    /// Environment: radiance `g(ω·up)` (times the colours), `g(u) = a + b·u`.
-    Environment { up: DVec3, a: f64, b: f64 },
+    /// Environment: radiance `g(ω·up)` (times the colours), `g(u) = a + b·u`,
+    /// its directions drawn from `mixture`.
+    Environment {
+        up: DVec3,
+        a: f64,
+        b: f64,
+        mixture: EnvironmentMixture,
+    },
 }
 
 /// A light ready for shading.
@@ -106,7 +112,12 @@ impl Light {
             LightKind::Environment { up, samples: n } => {
                 samples = n;
                 let (a, b) = crate::scene::ENVIRONMENT_GRADIENT;
-                Kind::Environment { up, a, b }
+                Kind::Environment {
+                    up,
+                    a,
+                    b,
+                    mixture: ENVIRONMENT_MIXTURE,
+                }
             }
         };
         Light {
@@ -137,8 +148,11 @@ const NONE: LightSample = LightSample {
     falloff: 0.0,
 };
 
-/// Sample `uv` ∈ [0, 1)² of `light` seen from `p` (`sample_light`).
-pub fn sample_light(light: &Light, p: DVec3, uv: [f64; 2]) -> LightSample {
+/// Sample `uv` ∈ [0, 1)² of `light` seen from `p` (`sample_light`), a point
+/// with unit shading normal `n` seen from the unit direction `v` (towards
+/// the eye; only the environment's samples depend on the two:
+/// [`super::environment`]).
+pub fn sample_light(light: &Light, p: DVec3, n: DVec3, v: DVec3, uv: [f64; 2]) -> LightSample {
     let (x, falloff_scale, cone) = match light.kind {
         Kind::Directional { direction } => {
             return LightSample {
@@ -147,18 +161,15 @@ pub fn sample_light(light: &Light, p: DVec3, uv: [f64; 2]) -> LightSample {
                 falloff: 1.0,
             }
         }
-        Kind::Environment { up, a, b } => {
-            // Uniform on the sphere of directions, no shadow ray (distance
-            // 0): the kernel's 4π is the f32 12.566371, this the exact one.
-            let z = 1.0 - 2.0 * uv[0];
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = std::f64::consts::TAU * uv[1];
-            let w = DVec3::new(r * phi.cos(), r * phi.sin(), z);
-            return LightSample {
-                to_light: w,
-                distance: 0.0,
-                falloff: 4.0 * std::f64::consts::PI * (a + b * w.dot(up)) / light.samples as f64,
-            };
+        Kind::Environment { up, a, b, mixture } => {
+            return super::environment::sample(
+                &mixture,
+                |w| a + b * w.dot(up),
+                light.samples,
+                n,
+                v,
+                uv,
+            );
         }
         Kind::Point { position } => (position, 1.0, None),
         Kind::Spot {

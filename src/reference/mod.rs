@@ -51,6 +51,7 @@
 mod aov;
 pub mod bvh;
 pub mod camera;
+pub mod environment;
 pub mod hit;
 pub mod intersect;
 pub mod lights;
@@ -122,6 +123,8 @@ pub struct World {
     /// (orthographic), for the ray cone ([`texture::cone_width`]).
     pixel_spread: f64,
     orthographic: bool,
+    /// The environment's samples cast shadow rays ([`environment::Options`]).
+    shadowed_environment: bool,
 }
 
 impl World {
@@ -213,7 +216,18 @@ impl World {
             accel,
             sampler,
             seed,
+            shadowed_environment: false,
         }
+    }
+
+    /// Draws the environment's samples as `options` say.
+    pub fn set_environment(&mut self, options: &environment::Options) {
+        for l in &mut self.lights {
+            if let lights::Kind::Environment { mixture, .. } = &mut l.kind {
+                *mixture = options.mixture;
+            }
+        }
+        self.shadowed_environment = options.shadowed;
     }
 
     /// The closest hit of `ray` (for tests and tools), taken as a camera
@@ -297,6 +311,21 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
 /// values before), or if the scene uses a WGSL shader ([`supports`], which
 /// the command line checks before).
 pub fn render(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> Frame {
+    render_with_environment(scene, sampling, sampler, &environment::Options::default())
+}
+
+/// [`render`], with the environment's samples drawn and traced as
+/// `options` say (for measurements; [`render`] is the GPU's estimator).
+///
+/// # Panics
+///
+/// As [`render`].
+pub fn render_with_environment(
+    scene: &Scene,
+    sampling: &Sampling,
+    sampler: Sampler,
+    options: &environment::Options,
+) -> Frame {
     if let Err(why) = sampling.check() {
         panic!("spp {why}");
     }
@@ -304,7 +333,8 @@ pub fn render(scene: &Scene, sampling: &Sampling, sampler: Sampler) -> Frame {
         panic!("{why}");
     }
     let t0 = Instant::now();
-    let world = World::new(scene, sampler, sampling.seed);
+    let mut world = World::new(scene, sampler, sampling.seed);
+    world.set_environment(options);
     let accel_build = t0.elapsed();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let jitter = sampling.spp > 1;

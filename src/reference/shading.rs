@@ -212,7 +212,13 @@ pub fn shade(
                 1 + i as u32,
                 pass.wrapping_mul(count).wrapping_add(j),
             );
-            let ls = sample_light(light, hit.position, uv);
+            let mut ls = sample_light(light, hit.position, n, v, uv);
+            if world.shadowed_environment
+                && matches!(light.kind, super::lights::Kind::Environment { .. })
+            {
+                // Measurements only: the environment at infinity, traced.
+                ls.distance = super::intersect::FAR;
+            }
             let ln = ls.to_light.dot(n);
             // Light below the geometric surface: the surface blocks it, no
             // ray is cast (as on the GPU).

@@ -39,6 +39,7 @@ shader_files![
     "primitives/sphere.wgsl",
     "primitives/triangle.wgsl",
     "lights.wgsl",
+    "environment.wgsl",
     "shading/shader.wgsl",
     "shading/checker.wgsl",
     "shadows.wgsl",
@@ -152,10 +153,11 @@ impl Stage {
                 "shading/checker.wgsl",
                 "stages/resolve.wgsl",
                 "lights.wgsl",
+                "environment.wgsl",
                 "stages/shadow.wgsl",
                 "stages/hit.wgsl",
             ],
-            Stage::Shadow => &["lights.wgsl", "stages/shadow.wgsl"],
+            Stage::Shadow => &["lights.wgsl", "environment.wgsl", "stages/shadow.wgsl"],
             Stage::Trace => &["queries.wgsl"],
         };
         let traversal = matches!(self, Stage::Hit | Stage::Shadow | Stage::Trace);

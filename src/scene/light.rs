@@ -72,7 +72,7 @@ pub enum LightKind {
     Environment {
         /// Unit world up (the sky's zenith).
         up: DVec3,
-        /// Directions sampled per pass (uniform on the sphere), in
+        /// Directions sampled per pass (from [`ENVIRONMENT_MIXTURE`]), in
         /// 1..=[`MAX_LIGHT_SAMPLES`].
         samples: u32,
     },
@@ -83,6 +83,52 @@ pub enum LightKind {
 /// nadir. The one source of the coefficients: the GPU light gets them from
 /// here (`render::layout`), the reference and the tests too.
 pub const ENVIRONMENT_GRADIENT: (f64, f64) = (0.6, 0.4);
+
+/// The mixture of direction densities the environment's samples are drawn
+/// from (docs/materials.md, "Environment"): with probability `uniform`
+/// uniform on the sphere, with `cosine` a cosine lobe around the shading
+/// normal, and with the rest split evenly over `lobes` Phong lobes
+/// `cos^e` around the mirror direction of the eye, of exponents
+/// `e = first_exponent · ratio^k`, k = 0..lobes. Each sample weighs the
+/// radiance over the mixture's density (one-sample multiple importance
+/// sampling), so the estimate is unbiased for any shader.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnvironmentMixture {
+    /// Weight of the uniform-sphere density.
+    pub uniform: f64,
+    /// Weight of the cosine lobe around the normal.
+    pub cosine: f64,
+    /// Number of Phong lobes around the mirror direction.
+    pub lobes: u32,
+    /// Exponent of the widest Phong lobe.
+    pub first_exponent: f64,
+    /// Ratio of each lobe's exponent to the one before.
+    pub ratio: f64,
+}
+
+impl EnvironmentMixture {
+    /// Weight of each Phong lobe.
+    pub fn lobe_weight(&self) -> f64 {
+        (1.0 - self.uniform - self.cosine) / f64::from(self.lobes)
+    }
+
+    /// Exponent of Phong lobe `k`.
+    pub fn exponent(&self, k: u32) -> f64 {
+        self.first_exponent * self.ratio.powi(k as i32)
+    }
+}
+
+/// The environment's mixture: 1/8 uniform, 3/8 cosine, and five Phong lobes
+/// of exponents 16, 256, 4096, 65536 and 2^20 (1/10 each). The one source of
+/// these values: the GPU light gets them from here (`render::layout`), the
+/// reference too.
+pub const ENVIRONMENT_MIXTURE: EnvironmentMixture = EnvironmentMixture {
+    uniform: 0.125,
+    cosine: 0.375,
+    lobes: 5,
+    first_exponent: 16.0,
+    ratio: 16.0,
+};
 
 /// Directions the environment samples per pass unless told otherwise.
 pub const ENVIRONMENT_SAMPLES: u32 = 64;

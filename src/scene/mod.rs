@@ -13,7 +13,10 @@ pub mod texture;
 mod validate;
 
 pub use camera::{Camera, Projection};
-pub use light::{Light, LightKind, ENVIRONMENT_GRADIENT, ENVIRONMENT_SAMPLES, MAX_LIGHT_SAMPLES};
+pub use light::{
+    EnvironmentMixture, Light, LightKind, ENVIRONMENT_GRADIENT, ENVIRONMENT_MIXTURE,
+    ENVIRONMENT_SAMPLES, MAX_LIGHT_SAMPLES,
+};
 pub use primitives::{Mesh, Plane, Sphere, Triangle};
 pub use shading::{
     Checker, MetallicRoughness, MetallicRoughnessTextures, ParamField, ParamType, ParamValue,

@@ -361,10 +361,12 @@ fn sphere_light_far_away_acts_like_a_point_light() {
 /// it must not darken it (no shadow rays).
 ///
 /// Each pixel is a Monte Carlo estimate from `N` = samples × spp directions
-/// uniform on the sphere: it lies within 4 standard deviations `σ/√N` of `E`
-/// (`σ²` = E[X²] − E², `X = 4π·g·max(0, ω·n)`, E[X²] = 4π ∫ g² cos² dω over
-/// the hemisphere, here by the moments of a linear `g`), and the image's
-/// mean within 4σ/√(N·pixels).
+/// of the environment's mixture (density `p`, docs/materials.md): it lies
+/// within 4 standard deviations `σ/√N` of `E` (`σ²` = E[X²] − E²,
+/// `X = g·max(0, ω·n)/p(ω)`, E[X²] = ∫ g² cos²/p dω over the hemisphere,
+/// bounded above by putting only the mixture's uniform and cosine parts in
+/// `p`: its Phong lobes only add density), and the image's mean within
+/// 4σ/√(N·pixels).
 #[test]
 fn environment_light_on_a_plane() {
     use penumbra::scene::ENVIRONMENT_GRADIENT;
@@ -404,7 +406,11 @@ fn environment_light_on_a_plane() {
     let c = n.dot(up);
     let i0 = intensity as f64;
     let expected = i0 * (PI * a + 2.0 * PI / 3.0 * b * c);
-    // E[X²] = 4π ∫_hemi (I·(a + b·ω·up))² (ω·n)² dω, by the midpoint rule
+    let (wu, wc) = (
+        penumbra::scene::ENVIRONMENT_MIXTURE.uniform,
+        penumbra::scene::ENVIRONMENT_MIXTURE.cosine,
+    );
+    // E[X²] ≤ ∫_hemi (I·(a + b·ω·up))² (ω·n)² / p dω, by the midpoint rule
     // on the hemisphere around n (uniform in cos θ and φ, dω = dcos dφ).
     let (t, s2) = (n.cross(DVec3::Z).normalize(), DVec3::Z);
     let m = 400;
@@ -416,10 +422,10 @@ fn environment_light_on_a_plane() {
             let phi = (j as f64 + 0.5) / m as f64 * 2.0 * PI;
             let w = n * cos + t * (sin * phi.cos()) + s2 * (sin * phi.sin());
             let g = i0 * (a + b * w.dot(up));
-            second += g * g * cos * cos;
+            second += g * g * cos * cos / (wu / (4.0 * PI) + wc * cos / PI);
         }
     }
-    second *= 4.0 * PI * (2.0 * PI / (m * m) as f64);
+    second *= 2.0 * PI / (m * m) as f64;
     let sigma = (second - expected * expected).sqrt();
     let count = (samples * spp) as f64;
     let frame = support::render_with(

@@ -21,6 +21,7 @@ mod camera;
 mod checker;
 mod default_light;
 mod double_sided;
+mod environment;
 mod gltf_materials;
 mod hard_cases;
 mod json_textures;

@@ -312,7 +312,7 @@ fn metallic_roughness_matches_the_gpu() {
             i as f64 * 1.1 - 0.55
         ));
     }
-    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+    for (i, roughness) in [0.1, 0.2, 0.5, 1.0].iter().enumerate() {
         for (j, metallic) in [0.0, 1.0].iter().enumerate() {
             let name = format!("m{i}{j}");
             shaders.push(format!(
@@ -354,10 +354,23 @@ fn metallic_roughness_matches_the_gpu() {
 
 /// The environment (docs/materials.md, "Environment") on metals and
 /// dielectrics of four roughnesses and a Phong floor, with an unshadowed
-/// point light: the GPU's environment samples are the reference's, so the
-/// images agree as on the other scenes.
+/// point light: the GPU's environment samples are the reference's (the same
+/// mixture, drawn around the same mirror direction of the eye), so the
+/// images agree as on the other scenes; seen through a perspective and an
+/// orthographic camera (the eye direction is per pixel in one, the view
+/// direction in the other).
 #[test]
 fn environment_matches_the_gpu() {
+    environment_chart_vs_reference("environment", r#""fov": 45"#);
+    environment_chart_vs_reference(
+        "environment, orthographic",
+        r#""projection": "orthographic", "half_height": 2"#,
+    );
+}
+
+/// The chart of [`environment_matches_the_gpu`] with camera projection
+/// `projection` (JSON members), GPU against the reference.
+fn environment_chart_vs_reference(label: &str, projection: &str) {
     let mut shaders = vec![
         r#""floor": {"type": "phong", "ambient": [0, 0, 0], "diffuse": [0.4, 0.4, 0.35], "specular": [0.2, 0.2, 0.2], "shininess": 20}"#.to_string(),
     ];
@@ -365,7 +378,7 @@ fn environment_matches_the_gpu() {
         r#"{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "shader": "floor"}"#
             .to_string(),
     ];
-    for (i, roughness) in [0.05, 0.2, 0.5, 1.0].iter().enumerate() {
+    for (i, roughness) in [0.1, 0.2, 0.5, 1.0].iter().enumerate() {
         for (j, metallic) in [0.0, 1.0].iter().enumerate() {
             let name = format!("m{i}{j}");
             shaders.push(format!(
@@ -380,7 +393,7 @@ fn environment_matches_the_gpu() {
     }
     let json = format!(
         r#"{{
-  "camera": {{"position": [0, 2.5, 4.5], "look_at": [0, 0.3, 0], "up": [0, 1, 0], "fov": 45, "width": 120, "height": 75}},
+  "camera": {{"position": [0, 2.5, 4.5], "look_at": [0, 0.3, 0], "up": [0, 1, 0], {projection}, "width": 120, "height": 75}},
   "shaders": {{ {} }},
   "objects": [ {} ],
   "lights": [
@@ -401,7 +414,7 @@ fn environment_matches_the_gpu() {
         seed: 5,
         time_budget: None,
     };
-    gpu_vs_reference("environment", &scene, KernelOptions::default(), sampling);
+    gpu_vs_reference(label, &scene, KernelOptions::default(), sampling);
 }
 
 /// The benchmark scene at 1024×1024 against Embree's figures (see

@@ -101,19 +101,8 @@ fn main() -> anyhow::Result<()> {
          (`tools/measure/materials_bench.rs`): `scenes/bunny_scene.glb` at its own size, three variants \
          uploaded and compiled first, then {rounds} rounds rendering each once in turn; the \
          render phase of each frame. Ratios are taken within a round.\n\n\
-         | | |\n|---|---|\n| CPU | {} |\n| Device | {} |\n| Driver | {} — {} |\n| Commit | {} |\n| Date | {} |\n| Load average at the end (1, 5, 15 min; other processes share the cores) | {} |\n",
-        common::machine::CpuInfo::read().describe(),
-        device.name,
-        device.driver_name,
-        device.driver_info,
-        common::machine::git_commit(&common::repo_root()),
-        common::machine::utc_now(),
-        std::fs::read_to_string("/proc/loadavg")
-            .unwrap_or_default()
-            .split_whitespace()
-            .take(3)
-            .collect::<Vec<_>>()
-            .join(", "),
+         {}",
+        common::machine::report_table(device),
     );
     let _ = writeln!(
         o,

@@ -122,6 +122,10 @@ pub(super) fn light(l: &crate::scene::Light, eye: DVec3) -> Light {
             gl.cone_offset = a as f32;
             gl.cone_scale = b as f32;
             gl.samples = samples;
+            // The sampling mixture (shaders/environment.wgsl).
+            let m = crate::scene::ENVIRONMENT_MIXTURE;
+            gl.edge1 = [m.uniform as f32, m.cosine as f32, m.lobe_weight() as f32];
+            gl.edge2 = [m.first_exponent as f32, m.ratio as f32, m.lobes as f32];
         }
     }
     gl

@@ -166,6 +166,28 @@ pub fn utc_now() -> String {
     )
 }
 
+/// The machine table that heads a report: the CPU, the Vulkan device and
+/// its driver, the commit, the date and the load average when it is written
+/// (other processes share the cores). A Markdown table, ending in a newline.
+pub fn report_table(device: &penumbra::vulkan::DeviceInfo) -> String {
+    let root = crate::repo_root();
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .unwrap_or_default()
+        .split_whitespace()
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(", ");
+    format!(
+        "| | |\n|---|---|\n| CPU | {} |\n| Device | {} |\n| Driver | {} — {} |\n| Commit | {} |\n| Date | {} |\n| Load average at the end (1, 5, 15 min; other processes share the cores) | {load} |\n",
+        CpuInfo::read().describe(),
+        device.name,
+        device.driver_name,
+        device.driver_info,
+        git_commit(&root),
+        utc_now(),
+    )
+}
+
 /// `git rev-parse --short HEAD`, marked when the tree has changes.
 pub fn git_commit(root: &Path) -> String {
     let git = |args: &[&str]| {
