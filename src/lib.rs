@@ -28,6 +28,7 @@
 
 pub mod brdf;
 pub mod bvh;
+pub mod calibration;
 pub mod error;
 pub mod farm;
 pub mod frame;
@@ -40,6 +41,7 @@ pub mod render;
 pub mod scene;
 pub mod terminal;
 pub mod tonemap;
+pub mod user_cache;
 pub mod vector_width;
 pub mod vulkan;
 pub mod watch;

@@ -4,17 +4,18 @@
 //! `LP_NATIVE_VECTOR_WIDTH` bits (128, 256 or 512), read once when the driver
 //! loads. Wider vectors can trace more rays per instruction but make the
 //! driver's compile of the kernel slower, so the right width depends on the
-//! kernel and the job: where a kernel runs faster at 512 bits on a CPU with
-//! AVX-512, a batch render long enough to repay the longer compile wants them,
-//! while `watch`, where every shader edit waits for the compile, keeps 256. The
-//! current kernel runs slower at 512 bits ([`WIDE_SPEEDUP`]), so auto keeps
-//! 256 for every job. The figures behind the rule are in docs/drivers.md
-//! ("Vector width").
+//! kernel, the CPU and the job: on a CPU with AVX-512 the kernel ran 0.91× as
+//! fast at 512 bits on a Zen 4 and 1.20× on a Xeon, so no fixed rule fits, and
+//! auto takes what the calibration measured on this machine
+//! ([`crate::calibration`]; 512 bits for long renders only, since they double
+//! the driver's compile), 256 bits where nothing was measured. The figures are
+//! in docs/drivers.md ("Vector width", "Calibration").
 //!
-//! [`choose`] is the decision as a pure function (CPU features, environment and
-//! job in, width out) so that every branch is testable on any machine; [`apply`]
-//! puts it into the process environment, which must happen before the Vulkan
-//! instance is created. The variable has no effect on GPU drivers.
+//! [`choose`] is the decision as a pure function (CPU features, environment,
+//! job and measured times in, settings out) so that every branch is testable on
+//! any machine; [`apply`] puts it into the process environment, which must
+//! happen before the Vulkan instance is created. The variables have no effect
+//! on GPU drivers.
 //!
 //! Mesa's shader cache does not key its entries by the vector width: lavapipe
 //! of Mesa 25.0 loads the machine code that a 256-bit run cached into a 512-bit
@@ -28,6 +29,8 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Duration;
 
+use crate::calibration::Measured;
+
 /// The environment variable lavapipe reads its vector width from.
 pub const VARIABLE: &str = "LP_NATIVE_VECTOR_WIDTH";
 
@@ -36,13 +39,6 @@ pub const CACHE_VARIABLE: &str = "MESA_SHADER_CACHE_DIR";
 
 /// The name of a width's own cache directory starts with this; the width follows.
 pub const CACHE_PREFIX: &str = "penumbra-lp";
-
-/// 512-bit vectors' speed-up over 256-bit ones for the current kernel on a CPU
-/// with AVX-512 (frame time at 256 / at 512; docs/drivers.md, "Vector width",
-/// gives the measurements). At or below 1 the wider vectors never pay, however
-/// long the render, and auto keeps 256: so it is for the staged renderer, whose
-/// frames run slower at 512 bits; the megakernel before it ran faster.
-pub const WIDE_SPEEDUP: f64 = 0.91;
 
 /// A render is "long" (worth 512-bit vectors, where they are faster) from this many primary rays
 /// (width × height × passes) on: 64 passes at 1024×1024.
@@ -161,26 +157,32 @@ pub enum Reason {
     Environment,
     /// `--vector-width N`.
     Flag,
-    /// Auto: AVX-512 and a long render.
-    LongRenderWithAvx512,
-    /// Auto: AVX-512, but the render is too short to repay the compile.
-    ShortRender,
-    /// Auto: AVX-512, but the kernel runs slower at 512 bits ([`WIDE_SPEEDUP`]).
-    WideSlower,
-    /// Auto: `watch` keeps 256 for compile latency.
-    Watch,
+    /// Auto: the calibration measured this setting faster than the default
+    /// by the speed-up, in thousandths (1250: 1.25×).
+    Calibrated {
+        /// The default's median frame time over this setting's, × 1000.
+        speedup_milli: u32,
+    },
+    /// Auto: the calibration measured nothing faster than the default by
+    /// more than its margin ([`crate::calibration::MARGIN`]).
+    CalibratedDefault,
+    /// Auto: AVX-512, but this machine has no calibration (or the user's
+    /// `GALLIUM_OVERRIDE_CPU_CAPS` rules it out): the default, 256.
+    NotCalibrated,
     /// Auto: no AVX-512 on this CPU.
     NoAvx512,
     /// Auto: no AVX either; the driver's default (128) is left alone.
     NoAvx,
 }
 
-/// The chosen width and why.
+/// The chosen settings and why.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Choice {
     /// The width in bits that the process will run lavapipe with; `None` when
     /// the variable is left unset and the driver picks its default.
     pub bits: Option<u32>,
+    /// `GALLIUM_OVERRIDE_CPU_CAPS` to set (the calibration's AVX2 code).
+    pub caps: Option<&'static str>,
     /// The user's own value of `LP_NATIVE_VECTOR_WIDTH`, verbatim, when it was set.
     pub user_value: Option<String>,
     /// Why.
@@ -188,64 +190,80 @@ pub struct Choice {
 }
 
 impl fmt::Display for Choice {
-    /// The summary line's phrase, e.g. `vector width 512 (auto: AVX-512, long render)`.
+    /// The summary line's phrase, e.g. `vector width 512 (calibrated on this
+    /// machine: 1.14× the default's speed)`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match (&self.user_value, self.bits) {
             (Some(v), _) => write!(f, "vector width {v}")?,
             (None, Some(b)) => write!(f, "vector width {b}")?,
             (None, None) => write!(f, "vector width driver default")?,
         }
-        let why = match self.reason {
-            Reason::Environment => "LP_NATIVE_VECTOR_WIDTH set",
-            Reason::Flag => "--vector-width",
-            Reason::LongRenderWithAvx512 => "auto: AVX-512, long render",
-            Reason::ShortRender => "auto: AVX-512, short render",
-            Reason::WideSlower => "auto: AVX-512, but 512 bits run this kernel slower",
-            Reason::Watch => "auto: watch",
-            Reason::NoAvx512 => "auto: no AVX-512",
-            Reason::NoAvx => "auto: no AVX",
-        };
-        write!(f, " ({why})")
+        if self.caps.is_some() {
+            write!(f, ", AVX2 code")?;
+        }
+        match &self.reason {
+            Reason::Environment => write!(f, " (LP_NATIVE_VECTOR_WIDTH set)"),
+            Reason::Flag => write!(f, " (--vector-width)"),
+            Reason::Calibrated { speedup_milli } => write!(
+                f,
+                " (calibrated on this machine: {:.2}x the default's speed)",
+                *speedup_milli as f64 / 1000.0
+            ),
+            Reason::CalibratedDefault => write!(
+                f,
+                " (calibrated on this machine: nothing {:.0} % faster than the default)",
+                (crate::calibration::MARGIN - 1.0) * 100.0
+            ),
+            Reason::NotCalibrated => write!(
+                f,
+                " (auto: AVX-512, not calibrated; `penumbra calibrate` measures)"
+            ),
+            Reason::NoAvx512 => write!(f, " (auto: no AVX-512)"),
+            Reason::NoAvx => write!(f, " (auto: no AVX)"),
+        }
     }
 }
 
-/// Chooses the width for the current kernel: [`choose_for_kernel`] with its
-/// measured [`WIDE_SPEEDUP`].
-pub fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) -> Choice {
-    choose_for_kernel(request, env, cpu, job, WIDE_SPEEDUP)
-}
-
-/// Chooses the width for a kernel whose 512-bit frames run `wide_speedup`
-/// times as fast as its 256-bit ones: the user's `LP_NATIVE_VECTOR_WIDTH`
-/// (`env`) first, then `--vector-width`, else by CPU and job — 512 for a long
-/// render ([`Job::is_long`]) on a CPU with AVX-512 if the wider vectors are
-/// faster, 256 on any CPU with AVX otherwise (`watch` included), and the
-/// driver's default without AVX.
-pub fn choose_for_kernel(
+/// Chooses the settings: the user's `LP_NATIVE_VECTOR_WIDTH` (`env`) first,
+/// then `--vector-width`, else by CPU, job and this machine's calibration
+/// (`measured`, [`crate::calibration::decide`]): the driver's default
+/// without AVX, 256 without AVX-512, and with AVX-512 the calibration's
+/// choice, or 256 where there is none.
+pub fn choose(
     request: Request,
     env: Option<&str>,
     cpu: CpuVectors,
     job: Job,
-    wide_speedup: f64,
+    measured: Option<&[Measured]>,
 ) -> Choice {
     if let Some(v) = env {
         return Choice {
             bits: v.trim().parse().ok(),
+            caps: None,
             user_value: Some(v.to_owned()),
             reason: Reason::Environment,
         };
     }
-    let (bits, reason) = match request {
-        Request::Bits(b) => (Some(b), Reason::Flag),
-        Request::Auto if !cpu.avx => (None, Reason::NoAvx),
-        Request::Auto if job == Job::Watch => (Some(256), Reason::Watch),
-        Request::Auto if !cpu.avx512f => (Some(256), Reason::NoAvx512),
-        Request::Auto if wide_speedup <= 1.0 => (Some(256), Reason::WideSlower),
-        Request::Auto if job.is_long() => (Some(512), Reason::LongRenderWithAvx512),
-        Request::Auto => (Some(256), Reason::ShortRender),
+    let decision = measured.and_then(|m| crate::calibration::decide(m, job));
+    let (bits, caps, reason) = match (request, decision) {
+        (Request::Bits(b), _) => (Some(b), None, Reason::Flag),
+        (Request::Auto, _) if !cpu.avx => (None, None, Reason::NoAvx),
+        (Request::Auto, _) if !cpu.avx512f => (Some(256), None, Reason::NoAvx512),
+        (Request::Auto, None) => (Some(256), None, Reason::NotCalibrated),
+        (Request::Auto, Some(d)) if d.candidate == crate::calibration::DEFAULT => {
+            (Some(d.candidate.bits()), None, Reason::CalibratedDefault)
+        }
+        (Request::Auto, Some(d)) => (
+            Some(d.candidate.bits()),
+            d.candidate.caps(),
+            Reason::Calibrated {
+                speedup_milli: (d.speedup * 1000.0).round() as u32,
+            },
+        ),
     };
     Choice {
         bits,
+        caps,
         user_value: None,
         reason,
     }
@@ -267,10 +285,10 @@ pub fn cache_dir(bits: u32, var: impl Fn(&str) -> Option<OsString>) -> Option<Pa
     if disabled {
         return None;
     }
-    let nonempty = |k: &str| var(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    let base = nonempty(CACHE_VARIABLE)
-        .or_else(|| nonempty("XDG_CACHE_HOME"))
-        .or_else(|| nonempty("HOME").map(|h| h.join(".cache")))?;
+    let base = var(CACHE_VARIABLE)
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| crate::user_cache::user_cache_dir(&var))?;
     let ours = |p: &Path| {
         p.file_name()
             .is_some_and(|n| n.to_string_lossy().starts_with(CACHE_PREFIX))
@@ -282,20 +300,40 @@ pub fn cache_dir(bits: u32, var: impl Fn(&str) -> Option<OsString>) -> Option<Pa
     Some(base.join(format!("{CACHE_PREFIX}{bits}")))
 }
 
-/// Chooses for this process ([`choose`] with this CPU and environment) and sets
-/// `LP_NATIVE_VECTOR_WIDTH` accordingly, with `MESA_SHADER_CACHE_DIR` set to
+/// Chooses for this process ([`choose`] with this CPU, environment and
+/// calibration) and sets `LP_NATIVE_VECTOR_WIDTH` (and
+/// `GALLIUM_OVERRIDE_CPU_CAPS` for the calibration's AVX2 code) accordingly,
+/// with `MESA_SHADER_CACHE_DIR` set to
 /// the width's own [`cache_dir`] (made if missing; if it cannot be made, Mesa
 /// runs without a disk cache, as it does for any unwritable directory). Call it
 /// before the Vulkan instance is created (lavapipe reads both when it loads)
 /// and while no other thread reads the environment: early in `main`.
-pub fn apply(request: Request, job: Job) -> Choice {
+///
+/// A `GALLIUM_OVERRIDE_CPU_CAPS` of the user's is never changed: with it the
+/// calibration is not used.
+pub fn apply(request: Request, job: Job, measured: Option<&[Measured]>) -> Choice {
+    apply_for(CpuVectors::detect(), request, job, measured)
+}
+
+/// [`apply`] as on a CPU with these instruction sets (a test's fake
+/// calibration names a CPU with AVX-512 on any machine).
+pub fn apply_for(
+    cpu: CpuVectors,
+    request: Request,
+    job: Job,
+    measured: Option<&[Measured]>,
+) -> Choice {
     let env = std::env::var(VARIABLE).ok();
-    let gallium = std::env::var("GALLIUM_OVERRIDE_CPU_CAPS").ok();
-    let cpu = CpuVectors::detect().capped_by(gallium.as_deref());
-    let choice = choose(request, env.as_deref(), cpu, job);
+    let gallium = std::env::var(crate::calibration::CAPS_VARIABLE).ok();
+    let cpu = cpu.capped_by(gallium.as_deref());
+    let measured = measured.filter(|_| gallium.is_none());
+    let choice = choose(request, env.as_deref(), cpu, job, measured);
     if choice.user_value.is_none() {
         if let Some(b) = choice.bits {
             std::env::set_var(VARIABLE, b.to_string());
+        }
+        if let Some(c) = choice.caps {
+            std::env::set_var(crate::calibration::CAPS_VARIABLE, c);
         }
     }
     if let Some(dir) = choice
@@ -311,6 +349,7 @@ pub fn apply(request: Request, job: Job) -> Choice {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibration::Candidate;
 
     const ZEN3: CpuVectors = CpuVectors {
         avx: true,
@@ -333,105 +372,124 @@ mod tests {
         }
     }
 
-    /// A kernel whose 512-bit frames are faster: the megakernel's 1.13.
-    fn choose(request: Request, env: Option<&str>, cpu: CpuVectors, job: Job) -> Choice {
-        choose_for_kernel(request, env, cpu, job, 1.13)
+    /// Made-up medians of 256 bits, 512 bits and AVX2 code at 256 bits.
+    fn times(w256: f64, w512: f64, avx2: f64) -> Vec<Measured> {
+        [
+            (Candidate::Wide256, w256),
+            (Candidate::Wide512, w512),
+            (Candidate::Avx2At256, avx2),
+        ]
+        .iter()
+        .map(|&(c, t)| Measured::of(c, &[t]).unwrap())
+        .collect()
     }
 
     #[test]
-    fn this_kernel_keeps_256_on_avx512_since_512_bits_run_it_slower() {
+    fn avx512_without_a_calibration_keeps_256_and_says_so() {
         for job in [
             render(None, 1 << 20, None),
             render(None, 1, None),
             Job::Watch,
         ] {
-            let c = super::choose(Request::Auto, None, ZEN4, job);
-            assert_eq!(c.bits, Some(256), "{job:?}");
+            let c = choose(Request::Auto, None, ZEN4, job, None);
+            assert_eq!(
+                (c.bits, c.caps, &c.reason),
+                (Some(256), None, &Reason::NotCalibrated)
+            );
         }
-        let c = super::choose(Request::Auto, None, ZEN4, render(None, 1000, None));
+        let c = choose(Request::Auto, None, ZEN4, Job::Watch, None);
         assert_eq!(
             c.to_string(),
-            "vector width 256 (auto: AVX-512, but 512 bits run this kernel slower)"
+            "vector width 256 (auto: AVX-512, not calibrated; `penumbra calibrate` measures)"
         );
-        // The flag and the environment still give 512.
-        let c = super::choose(Request::Bits(512), None, ZEN4, render(None, 1, None));
-        assert_eq!((c.bits, c.reason), (Some(512), Reason::Flag));
-        let c = super::choose(Request::Auto, Some("512"), ZEN4, Job::Watch);
-        assert_eq!(c.bits, Some(512));
     }
 
     #[test]
-    fn long_renders_on_avx512_get_512_where_it_is_faster() {
-        let c = choose(Request::Auto, None, ZEN4, render(None, 64, None));
-        assert_eq!(c.bits, Some(512));
+    fn a_calibration_gives_its_choice_and_speed_up() {
+        let t = times(100.0, 80.0, 95.0);
+        let c = choose(Request::Auto, None, ZEN4, render(None, 64, None), Some(&t));
+        assert_eq!((c.bits, c.caps), (Some(512), None));
         assert_eq!(
             c.to_string(),
-            "vector width 512 (auto: AVX-512, long render)"
+            "vector width 512 (calibrated on this machine: 1.25x the default's speed)"
         );
-        // 1920x1080 at 33 passes is past 2^26 primary rays; at 32 it is not.
+        // A short render or watch: the best 256-bit setting, AVX2 code here.
+        for job in [render(None, 63, None), Job::Watch] {
+            let c = choose(Request::Auto, None, ZEN4, job, Some(&t));
+            assert_eq!((c.bits, c.caps), (Some(256), Some("avx")), "{job:?}");
+            assert_eq!(
+                c.to_string(),
+                "vector width 256, AVX2 code (calibrated on this machine: 1.05x the default's speed)"
+            );
+        }
+        let t = times(100.0, 101.0, 99.0);
+        let c = choose(Request::Auto, None, ZEN4, render(None, 64, None), Some(&t));
+        assert_eq!(
+            (c.bits, c.caps, &c.reason),
+            (Some(256), None, &Reason::CalibratedDefault)
+        );
+        assert_eq!(
+            c.to_string(),
+            "vector width 256 (calibrated on this machine: nothing 3 % faster than the default)"
+        );
+    }
+
+    #[test]
+    fn long_renders_are_2_to_the_26_primary_rays_within_a_budget_of_5_s() {
         let hd = Some(1920 * 1080);
-        assert_eq!(
-            choose(Request::Auto, None, ZEN4, render(hd, 33, None)).bits,
-            Some(512)
-        );
-        assert_eq!(
-            choose(Request::Auto, None, ZEN4, render(hd, 32, None)).reason,
-            Reason::ShortRender
-        );
-    }
-
-    #[test]
-    fn short_renders_and_watch_keep_256() {
-        let c = choose(Request::Auto, None, ZEN4, render(None, 63, None));
-        assert_eq!((c.bits, c.reason), (Some(256), Reason::ShortRender));
-        let c = choose(Request::Auto, None, ZEN4, render(Some(64 * 64), 1024, None));
-        assert_eq!(
-            c.bits,
-            Some(256),
-            "64x64 at 1024 passes is 2^22 rays: short"
-        );
-        let c = choose(
-            Request::Auto,
-            None,
-            ZEN4,
-            render(Some(64 * 64), 1 << 16, None),
-        );
-        assert_eq!(
-            c.bits,
-            Some(512),
-            "64x64 at 65536 passes is 2^28 rays: long"
-        );
-        let c = choose(Request::Auto, None, ZEN4, Job::Watch);
-        assert_eq!(c.to_string(), "vector width 256 (auto: watch)");
-        // A time budget under 5 s caps the render's length.
-        let c = choose(Request::Auto, None, ZEN4, render(None, 1000, Some(4)));
-        assert_eq!(c.reason, Reason::ShortRender);
-        let c = choose(Request::Auto, None, ZEN4, render(None, 1000, Some(5)));
-        assert_eq!(c.bits, Some(512));
+        assert!(render(hd, 33, None).is_long());
+        assert!(!render(hd, 32, None).is_long());
+        assert!(render(None, 64, None).is_long());
+        assert!(!render(None, 63, None).is_long());
+        assert!(!render(Some(64 * 64), 1024, None).is_long());
+        assert!(render(Some(64 * 64), 1 << 16, None).is_long());
+        assert!(!render(None, 1000, Some(4)).is_long());
+        assert!(render(None, 1000, Some(5)).is_long());
+        assert!(!Job::Watch.is_long());
     }
 
     #[test]
     fn without_avx512_it_is_256_and_without_avx_the_default() {
-        let c = choose(Request::Auto, None, ZEN3, render(None, 1000, None));
+        let t = times(100.0, 50.0, 50.0);
+        let c = choose(
+            Request::Auto,
+            None,
+            ZEN3,
+            render(None, 1000, None),
+            Some(&t),
+        );
         assert_eq!(c.to_string(), "vector width 256 (auto: no AVX-512)");
-        let c = choose(Request::Auto, None, SSE_ONLY, render(None, 1000, None));
+        let c = choose(
+            Request::Auto,
+            None,
+            SSE_ONLY,
+            render(None, 1000, None),
+            None,
+        );
         assert_eq!(c.to_string(), "vector width driver default (auto: no AVX)");
-        assert_eq!(choose(Request::Auto, None, SSE_ONLY, Job::Watch).bits, None);
+        assert_eq!(
+            choose(Request::Auto, None, SSE_ONLY, Job::Watch, None).bits,
+            None
+        );
     }
 
     #[test]
-    fn the_flag_overrides_and_the_environment_wins() {
-        let c = choose(Request::Bits(128), None, ZEN4, render(None, 1000, None));
+    fn the_flag_overrides_and_the_environment_wins_over_a_calibration() {
+        let t = times(100.0, 50.0, 60.0);
+        let long = render(None, 1000, None);
+        let c = choose(Request::Bits(128), None, ZEN4, long, Some(&t));
         assert_eq!(c.to_string(), "vector width 128 (--vector-width)");
-        let c = choose(Request::Bits(512), None, ZEN3, Job::Watch);
+        assert_eq!(c.caps, None);
+        let c = choose(Request::Bits(512), None, ZEN3, Job::Watch, None);
         assert_eq!(c.bits, Some(512));
-        let c = choose(Request::Bits(128), Some("512"), ZEN3, Job::Watch);
+        let c = choose(Request::Bits(128), Some("512"), ZEN3, Job::Watch, Some(&t));
         assert_eq!(
             c.to_string(),
             "vector width 512 (LP_NATIVE_VECTOR_WIDTH set)"
         );
-        assert_eq!(c.bits, Some(512));
-        let c = choose(Request::Auto, Some("weird"), ZEN4, render(None, 1000, None));
+        let c = choose(Request::Auto, Some("256"), ZEN4, long, Some(&t));
+        assert_eq!((c.bits, c.caps), (Some(256), None));
+        let c = choose(Request::Auto, Some("weird"), ZEN4, long, None);
         assert_eq!((c.bits, c.user_value.as_deref()), (None, Some("weird")));
     }
 
@@ -442,8 +500,9 @@ mod tests {
         assert_eq!(ZEN4.capped_by(Some("sse4.1")), SSE_ONLY);
         assert_eq!(ZEN4.capped_by(None), ZEN4);
         let cpu = ZEN4.capped_by(Some("avx"));
+        let t = times(100.0, 50.0, 60.0);
         assert_eq!(
-            choose(Request::Auto, None, cpu, render(None, 64, None)).bits,
+            choose(Request::Auto, None, cpu, render(None, 64, None), Some(&t)).bits,
             Some(256)
         );
     }

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The checks docs/gpu.md reports, for a machine with a Vulkan GPU: the render test binaries
 # with the Khronos validation layer on, one-shot renders with their phases, per-stage times,
-# the staged renderer against the megakernel (7031ecb), and the benchmark without lavapipe's
-# knobs and the peers. Everything it prints and writes goes to OUT.
+# the staged renderer against the megakernel (7031ecb), the pipeline cache on disk (one-shot
+# renders without and with it), and the benchmark without lavapipe's knobs and the peers. Everything it prints and writes goes to OUT.
 #
 #   cargo build --release --workspace --all-targets && cargo test --release --no-run
 #   tools/measure/ab_commits.sh --build 7031ecb        # the megakernel's `ab` (prints its path)
@@ -57,6 +57,20 @@ for s in scenes/bunny_scene.glb scenes/showcase.json scenes/area_lights.json; do
         echo "$s round $r: megakernel $a ms, stages $b ms"
     done
 done
+
+step "pipeline cache on disk: one-shot renders, pipeline creation without, then with, penumbra's VkPipelineCache"
+# The NVIDIA driver's own shader disk cache is off in these three runs, so that the second
+# shows what penumbra's cache file (src/vulkan/pipeline_cache.rs) saves by itself; the first
+# writes the file into a fresh cache directory, the third has it turned off.
+pc=$(mktemp -d)
+for run in "cold, writes the file" "warm, reads it" "turned off (PENUMBRA_PIPELINE_CACHE=0)"; do
+    off=1; case $run in turned*) off=0 ;; esac
+    line=$(XDG_CACHE_HOME=$pc __GL_SHADER_DISK_CACHE=0 PENUMBRA_PIPELINE_CACHE=$off \
+        "$bin/penumbra" render scenes/bunny_scene.glb -o "$out/bunny_pc.png" 2>&1 | tail -1)
+    echo "$run: $(echo "$line" | grep -oE 'pipeline creation [0-9.]+ ms'), $(echo "$line" | grep -oE 'driver compile [0-9.]+ ms' | head -1)"
+done
+ls -l "$pc/penumbra" | grep pipelines- || echo "no pipeline cache file written"
+rm -rf "$pc"
 
 step "benchmark"
 "$bin/bench" --no-knobs --no-peers --out "$out/bench"

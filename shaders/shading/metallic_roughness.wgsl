@@ -80,7 +80,10 @@ fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
         vis = chi_plus(lh) * chi_plus(vh) / (vis_l * vis_v);
     }
     let specular = vis * d;
-    let schlick = pow(1.0 - abs(vh), 5.0);
+    // |v·h| ≤ 1, but in f32 the dot of two unit vectors can round above 1
+    // (l ≈ v, which the environment's lobes around the mirror direction
+    // reach), and WGSL's pow of a negative base is NaN.
+    let schlick = pow(max(0.0, 1.0 - abs(vh)), 5.0);
     let c = p.base_colour;
     let metal = specular * (c + (1.0 - c) * schlick);
     let fresnel = 0.04 + 0.96 * schlick;

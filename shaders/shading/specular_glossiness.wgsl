@@ -63,7 +63,8 @@ fn shade(s: Surface, l: LightSample, p: Params) -> vec3<f32> {
     if vis_l * vis_v > 0.0 && lh > 0.0 && vh > 0.0 {
         vis = 1.0 / (vis_l * vis_v);
     }
-    let f = p.specular + (1.0 - p.specular) * pow(1.0 - abs(vh), 5.0);
+    // max: |v·h| can round above 1 in f32, and pow of a negative base is NaN.
+    let f = p.specular + (1.0 - p.specular) * pow(max(0.0, 1.0 - abs(vh)), 5.0);
     let c_diff = p.diffuse * (1.0 - max(p.specular.r, max(p.specular.g, p.specular.b)));
     let diffuse_part = (1.0 - f) * c_diff / PI;
     let specular_part = f * vis * d;

@@ -3,6 +3,7 @@
 //! loader's limits, durations in seconds, the options of a renderer, and the
 //! exit that leaves a hung device alone.
 
+mod calibrate;
 mod devices;
 mod diff;
 mod farm;
@@ -35,6 +36,9 @@ pub struct Cli {
 enum Command {
     /// Render a scene (.json, .gltf or .glb) to a PNG (sRGB, 8 bit) or OpenEXR (linear float) file.
     Render(render::RenderArgs),
+    /// Time lavapipe's settings (vector width, AVX2 or AVX-512 code) on this
+    /// machine and remember the fastest for later renders (docs/drivers.md).
+    Calibrate(calibrate::CalibrateArgs),
     /// List the Vulkan devices with their type and driver version.
     Devices,
     /// Render a scene, then re-render whenever it, a file it references or a
@@ -61,7 +65,7 @@ impl Cli {
             Command::Diff(a) => Some(a.b.clone()),
             Command::Merge(a) => Some(a.output.clone()),
             Command::Farm(f) => Some(f.output()),
-            Command::Devices => None,
+            Command::Devices | Command::Calibrate(_) => None,
         }
     }
 
@@ -70,6 +74,7 @@ impl Cli {
         match self.command {
             Command::Render(args) => render::run(args),
             Command::Devices => devices::run(),
+            Command::Calibrate(args) => calibrate::run(args),
             Command::Watch(args) => watch::run(args),
             Command::Diff(args) => diff::run(args),
             Command::Merge(args) => merge::run(args),

@@ -48,8 +48,9 @@ pub struct WatchArgs {
     /// Enable the Khronos validation layer (errors are reported per reload).
     #[arg(long)]
     validate: bool,
-    /// lavapipe's SIMD width in bits: `auto` keeps 256 for compile latency;
-    /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
+    /// lavapipe's SIMD width in bits: `auto` takes this machine's calibration
+    /// (`penumbra calibrate`; 256-bit settings only, for compile latency),
+    /// else 256; LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
     /// Longest, in seconds, that one submission of work may run on the device
@@ -69,8 +70,20 @@ pub struct WatchArgs {
 }
 
 pub fn run(args: WatchArgs) -> anyhow::Result<()> {
-    // Before the Vulkan driver loads.
-    vector_width::apply(args.vector_width, vector_width::Job::Watch);
+    // Before the Vulkan driver loads: this machine's calibration if there is
+    // one; watch never calibrates (an edit must not wait for it).
+    let settings = super::calibrate::settings(
+        args.vector_width,
+        vector_width::Job::Watch,
+        args.device.as_ref(),
+        false,
+    )?;
+    if matches!(
+        settings.choice.reason,
+        vector_width::Reason::Calibrated { .. } | vector_width::Reason::CalibratedDefault
+    ) {
+        eprintln!("note: {}", settings.choice);
+    }
     let shaders = match args.shaders {
         Some(dir) => ShaderSource::Directory(dir),
         None => match penumbra::render::compile::checkout_shader_dir() {

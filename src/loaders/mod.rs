@@ -5,6 +5,7 @@
 pub mod gltf;
 pub mod guard;
 pub mod json;
+pub mod ktx2;
 pub mod lighting;
 pub mod texture;
 

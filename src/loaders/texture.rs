@@ -1,5 +1,6 @@
 //! Texture images: PNG or JPEG bytes (a file, a glTF bufferView or a
-//! `data:` URI) decoded with the `image` crate into a [`Texture`].
+//! `data:` URI) decoded with the `image` crate into a [`Texture`], or a
+//! glTF file's KTX2/Basis Universal image ([`super::ktx2`]).
 //!
 //! Decoding is bounded before it allocates: the decoder reads the header
 //! alone first, and its size is checked against [`MAX_TEXTURE_SIDE`], the
@@ -48,7 +49,8 @@ pub fn decode(
 #[derive(Debug)]
 pub struct Pending {
     bytes: Vec<u8>,
-    format: ImageFormat,
+    /// `None` for a KTX2 image.
+    format: Option<ImageFormat>,
     label: String,
     srgb: bool,
     /// The decoder's output, bytes, from the header.
@@ -68,6 +70,9 @@ pub fn prepare(
     srgb: bool,
     guard: &Guard,
 ) -> Result<Pending, Refused> {
+    if super::ktx2::is_ktx2(&bytes) || mime == Some(super::ktx2::MIME) {
+        return prepare_ktx2(bytes, mime, label, srgb, guard);
+    }
     let format = format_of(&bytes, mime)?;
     let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
     let mut reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
@@ -78,6 +83,25 @@ pub fn prepare(
     reader.limits(header);
     let decoder = reader.into_decoder().map_err(corrupt)?;
     let (width, height) = decoder.dimensions();
+    check_size(width, height)?;
+    let decoded = decoder.total_bytes();
+    let (transient, kept) = texture_bytes(width, height, decoded);
+    guard.charge_texture(width, height, transient, kept)?;
+    check_holds(format, width, height, bytes.len())?;
+    drop(decoder);
+    Ok(Pending {
+        bytes,
+        format: Some(format),
+        label: label.to_string(),
+        srgb,
+        decoded,
+        transient,
+    })
+}
+
+/// Refuses an empty image, or one larger than [`MAX_TEXTURE_SIDE`], from
+/// the size its header gives.
+fn check_size(width: u32, height: u32) -> Result<(), Refused> {
     if width == 0 || height == 0 {
         return Err(Refused(format!("is an empty image ({width}×{height})")));
     }
@@ -86,25 +110,60 @@ pub fn prepare(
             "is {width}×{height} texels by its header, larger than the {MAX_TEXTURE_SIDE} texels a side penumbra takes (refused before decoding)"
         )));
     }
-    let decoded = decoder.total_bytes();
-    let (transient, kept) = texture_bytes(width, height, decoded);
-    guard.charge_texture(width, height, transient, kept)?;
-    check_holds(format, width, height, bytes.len())?;
-    drop(decoder);
+    Ok(())
+}
+
+/// [`prepare`] for a KTX2 image: its header's size is checked and charged
+/// as a PNG's would be; the transcoder's output is the RGBA8 texels.
+fn prepare_ktx2(
+    bytes: Vec<u8>,
+    mime: Option<&str>,
+    label: &str,
+    srgb: bool,
+    guard: &Guard,
+) -> Result<Pending, Refused> {
+    use super::ktx2;
+    if !ktx2::is_ktx2(&bytes) {
+        return Err(Refused(format!(
+            "declares mimeType {:?} but is not a KTX2 file",
+            ktx2::MIME
+        )));
+    }
+    if let Some(m) = mime.filter(|&m| m != ktx2::MIME) {
+        return Err(Refused(format!(
+            "declares mimeType {m:?} but holds a KTX2 image"
+        )));
+    }
+    let (width, height) = ktx2::dimensions(&bytes)?;
+    check_size(width, height)?;
+    // The transcoder's output is the RGBA8 image, then copied into texels.
+    let decoded = u64::from(width) * u64::from(height) * 4;
+    let (_, kept) = texture_bytes(width, height, decoded);
+    guard.charge_texture(width, height, decoded, kept)?;
     Ok(Pending {
         bytes,
-        format,
+        format: None,
         label: label.to_string(),
         srgb,
         decoded,
-        transient,
+        transient: decoded,
     })
 }
 
 impl Pending {
     /// Decodes the image, within the limits its header set.
     pub fn decode(self) -> Result<Texture, Refused> {
-        let format = self.format;
+        let Some(format) = self.format else {
+            let (width, height) = super::ktx2::dimensions(&self.bytes)?;
+            return Ok(Texture {
+                texels: super::ktx2::decode(&self.bytes, width, height)?,
+                label: self.label,
+                file: None,
+                width,
+                height,
+                srgb: self.srgb,
+            });
+        };
         let corrupt = |e: image::ImageError| Refused(format!("is a corrupt {format:?} image: {e}"));
         let mut reader = image::ImageReader::with_format(Cursor::new(&self.bytes[..]), format);
         let mut header = image::Limits::default();

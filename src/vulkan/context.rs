@@ -59,6 +59,10 @@ pub struct DeviceInfo {
     pub vendor_id: u32,
     /// Vendor-specific device id.
     pub device_id: u32,
+    /// `driverVersion`, in the vendor's encoding.
+    pub driver_version: u32,
+    /// `pipelineCacheUUID`: pipeline cache data is valid for devices of this UUID only.
+    pub pipeline_cache_uuid: [u8; 16],
 }
 
 /// The device limits the renderer has to respect.
@@ -247,6 +251,8 @@ impl InstanceHolder {
             driver_info: c_str(driver.driver_info_as_c_str()),
             vendor_id: props.vendor_id,
             device_id: props.device_id,
+            driver_version: props.driver_version,
+            pipeline_cache_uuid: props.pipeline_cache_uuid,
         };
         let l = &props.limits;
         let limits = DeviceLimits {
@@ -322,6 +328,10 @@ pub(crate) struct DeviceShared {
     /// may use is destroyed any more (every `Drop` leaks instead), and every
     /// later submit fails at once. Only ending the process frees the device.
     hung: std::sync::atomic::AtomicBool,
+    /// The device's pipeline cache (src/vulkan/pipeline_cache.rs), and the
+    /// file it is written back to when the device closes.
+    pub(crate) pipeline_cache: vk::PipelineCache,
+    pipeline_cache_file: Option<std::path::PathBuf>,
 }
 
 impl DeviceShared {
@@ -347,6 +357,11 @@ impl Drop for DeviceShared {
         // the instance goes after its device, and is not used after this.
         unsafe {
             let _ = self.device.device_wait_idle();
+            if let Some(path) = &self.pipeline_cache_file {
+                super::pipeline_cache::save(&self.device, self.pipeline_cache, path);
+            }
+            self.device
+                .destroy_pipeline_cache(self.pipeline_cache, None);
             self.device.destroy_device(None);
             std::mem::ManuallyDrop::drop(&mut self.instance);
         }
@@ -429,10 +444,24 @@ impl Context {
                 .create_device(physical.handle, &device_info, None)
         }
         .map_err(vk_err("vkCreateDevice"))?;
+        let identity = super::pipeline_cache::CacheIdentity {
+            vendor_id: physical.info.vendor_id,
+            device_id: physical.info.device_id,
+            driver_version: physical.info.driver_version,
+            uuid: physical.info.pipeline_cache_uuid,
+        };
+        let pipeline_cache_file = super::pipeline_cache::file(&identity);
+        let initial = pipeline_cache_file
+            .as_deref()
+            .map(|p| super::pipeline_cache::read(p, &identity))
+            .unwrap_or_default();
+        let pipeline_cache = super::pipeline_cache::create(&device, &initial);
         let shared = Arc::new(DeviceShared {
             device,
             instance: std::mem::ManuallyDrop::new(instance),
             hung: std::sync::atomic::AtomicBool::new(false),
+            pipeline_cache,
+            pipeline_cache_file,
         });
         let device = &shared.device;
         // SAFETY: family/index were requested at device creation.

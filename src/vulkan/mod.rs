@@ -10,6 +10,7 @@ mod context;
 mod dispatch;
 mod image;
 mod pipeline;
+pub mod pipeline_cache;
 
 pub use buffer::{Buffer, BufferUsage, MAX_KEPT_STAGING};
 pub use context::{

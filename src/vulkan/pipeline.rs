@@ -205,7 +205,7 @@ impl Context {
             .stage(stage)
             .layout(result.layout)];
         let created =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+            unsafe { device.create_compute_pipelines(self.shared.pipeline_cache, &info, None) };
         // The module is only needed while the pipeline is being created.
         unsafe { device.destroy_shader_module(module, None) };
         let pipelines =

@@ -1266,10 +1266,10 @@ fn gltf_texture_transform_errors_name_the_files_field() {
 }
 
 #[test]
-fn gltf_draco_and_basisu_are_refused_by_name_before_the_crates_validation() {
+fn gltf_draco_data_that_is_no_draco_stream_and_basisu_are_named() {
     // As Duck's glTF-Draco variant: the accessors have no bufferView (the
-    // data is in the Draco stream), which the crate's validation reports
-    // as "Missing data" unless the extension is named first.
+    // data is in the Draco stream), which the crate's validation must not
+    // report; here the named view holds no Draco stream.
     box_textured_fails(
         |g| {
             g["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
@@ -1282,22 +1282,22 @@ fn gltf_draco_and_basisu_are_refused_by_name_before_the_crates_validation() {
                 "KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}
             });
         },
-        "extensionsRequired[0]",
-        &[
-            "requires KHR_draco_mesh_compression",
-            "uncompressed variant",
-        ],
+        "meshes[0].primitives[0].extensions.KHR_draco_mesh_compression.bufferView",
+        &["bufferViews[0] is not a valid Draco mesh"],
     );
-    // As StainedGlassLamp's KTX variant: a texture with no `source`.
+    // As StainedGlassLamp's KTX variant: a texture with no `source`, its
+    // image a KTX2 file (the identifier, then nothing valid).
     box_textured_fails(
         |g| {
             g["extensionsUsed"] = json!(["KHR_texture_basisu"]);
             g["extensionsRequired"] = json!(["KHR_texture_basisu"]);
             g["textures"][0].as_object_mut().unwrap().remove("source");
             g["textures"][0]["extensions"] = json!({"KHR_texture_basisu": {"source": 0}});
+            // «KTX 20» and its line endings, then zeros.
+            g["images"][0]["uri"] = json!("data:image/ktx2;base64,q0tUWCAyMLsNChoKAAAAAAAA");
         },
-        "extensionsRequired[0]",
-        &["requires KHR_texture_basisu", "PNG"],
+        "images[0].uri",
+        &["is a corrupt KTX2 image"],
     );
     // Any other unknown required extension is named too.
     box_textured_fails(

@@ -11,6 +11,7 @@ mod watch_support;
 
 mod area_light_input;
 mod bad_input;
+mod calibrate;
 mod default_lighting;
 mod docs_flags;
 mod environment;
@@ -22,6 +23,7 @@ mod gltf_materials;
 mod gltf_render;
 mod json_textures;
 mod metrics;
+mod pipeline_cache;
 mod setup_script;
 mod vector_width;
 mod watch;

@@ -1,12 +1,15 @@
 //! `penumbra render --vector-width`: the SIMD width lavapipe runs with, chosen
 //! before the driver loads and said in the summary line. The device's own name
 //! ("llvmpipe (LLVM 15.0.6, 128 bits)") shows that the width reached the driver.
-//! The choice's every branch (AVX-512 or not, long or short, watch) is tested
-//! as a pure function in src/vector_width.rs; here the wiring.
+//! The choice's every branch (AVX-512 or not, calibrated or not, long or
+//! short, watch) is tested as a pure function in src/vector_width.rs, the
+//! calibration's use in tests/cli/calibrate.rs; here the wiring. Each render
+//! has its own XDG_CACHE_HOME, so that no calibration of the user's is read.
 
 use std::path::Path;
 use std::process::{Command, Output};
 
+use penumbra::calibration::wisdom;
 use penumbra::vector_width::{self, CpuVectors, Job, Request};
 
 fn scene() -> String {
@@ -18,13 +21,21 @@ fn scene() -> String {
 }
 
 /// Renders the showcase small on lavapipe, with `LP_NATIVE_VECTOR_WIDTH` set to
-/// `env` or removed.
+/// `env` or removed, and no calibration (an empty XDG_CACHE_HOME; Mesa's
+/// shader cache where it would be without it).
 fn render(dir: &Path, args: &[&str], env: Option<&str>) -> (Output, String) {
     let out = dir.join("out.png");
+    let mesa = std::env::var_os(vector_width::CACHE_VARIABLE)
+        .map(std::path::PathBuf::from)
+        .or_else(|| wisdom::user_cache_dir(|k| std::env::var_os(k)))
+        .unwrap_or_else(|| dir.join("mesa"));
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
     cmd.args(["render", &scene(), "-o", out.to_str().unwrap()])
         .args(["--device", "llvmpipe"])
         .args(args)
+        .env("XDG_CACHE_HOME", dir.join("xdg"))
+        .env(vector_width::CACHE_VARIABLE, mesa)
+        .env_remove("PENUMBRA_CALIBRATION_FAKE")
         .env_remove("GALLIUM_OVERRIDE_CPU_CAPS");
     match env {
         Some(v) => cmd.env(vector_width::VARIABLE, v),
@@ -49,37 +60,27 @@ fn summary(output: &Output, stdout: &str) -> String {
     line.to_owned()
 }
 
+/// Without a calibration, a short render takes the CPU's default. (A long
+/// one on a CPU with AVX-512 would calibrate first: tests/cli/calibrate.rs.)
 #[test]
 fn auto_says_its_choice_and_the_driver_uses_it() {
     let dir = tempfile::tempdir().unwrap();
-    // 64 passes at the scene's size (not on the command line: assumed 1024x1024)
-    // is a long render; 1 pass at 96x54 a short one.
-    for (args, job) in [
-        (
-            &["--width", "96", "--height", "54"][..],
-            Job::Render {
-                pixels: Some(96 * 54),
-                passes: 1,
-                time_budget: None,
-            },
-        ),
-        (
-            &["--spp", "64"][..],
-            Job::Render {
-                pixels: None,
-                passes: 64,
-                time_budget: None,
-            },
-        ),
-    ] {
-        let want = vector_width::choose(Request::Auto, None, CpuVectors::detect(), job);
-        let (output, stdout) = render(dir.path(), args, None);
-        let line = summary(&output, &stdout);
-        assert!(line.ends_with(&format!(" | {want}")), "want {want}: {line}");
-        if let Some(bits) = want.bits {
-            assert!(line.contains(&format!(", {bits} bits)")), "{line}");
-        }
+    let job = Job::Render {
+        pixels: Some(96 * 54),
+        passes: 1,
+        time_budget: None,
+    };
+    let want = vector_width::choose(Request::Auto, None, CpuVectors::detect(), job, None);
+    let (output, stdout) = render(dir.path(), &["--width", "96", "--height", "54"], None);
+    let line = summary(&output, &stdout);
+    assert!(line.ends_with(&format!(" | {want}")), "want {want}: {line}");
+    if let Some(bits) = want.bits {
+        assert!(line.contains(&format!(", {bits} bits)")), "{line}");
     }
+    assert!(
+        !dir.path().join("xdg/penumbra/calibration.json").exists(),
+        "a short render calibrated"
+    );
 }
 
 #[test]

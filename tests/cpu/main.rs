@@ -8,7 +8,9 @@
 
 mod brdf;
 mod docs;
+mod gltf_draco;
 mod gltf_extensions;
+mod gltf_ktx2;
 mod gltf_loader;
 mod json_textures;
 mod kinds;

@@ -172,3 +172,29 @@ fn smooth_metal_sphere_mirrors_the_environment() {
     let mean = ratio_sum / judged as f64;
     assert!((mean - 1.0).abs() <= 0.02, "mean of pixel / L(r): {mean}");
 }
+
+/// Where the mirror direction is the eye's (the sphere's centre seen
+/// head-on), the environment's lobes put samples at `l ≈ v`, so `h ≈ v` and
+/// `|v·h|` can round above 1 in f32: the Fresnel term's `1 − |v·h|` must not
+/// go negative into WGSL's `pow` (NaN). Every pixel of glTF's BRDF, metal
+/// and dielectric at several roughnesses, is finite.
+#[test]
+fn no_sample_of_glossy_materials_is_nan_where_the_light_comes_from_the_eye() {
+    for shader in [
+        r#"{"type": "metallic_roughness", "base_colour": [0.8, 0.1, 0.1], "metallic": 0, "roughness": 0.2}"#,
+        r#"{"type": "metallic_roughness", "base_colour": [1, 0.8, 0.4], "metallic": 1, "roughness": 0.5}"#,
+        r#"{"type": "specular_glossiness", "diffuse": [0.5, 0.5, 0.5], "specular": [0.5, 0.5, 0.5], "glossiness": 0.8}"#,
+    ] {
+        let scene = support::load_json(&sphere_json(shader, 4096));
+        for seed in 0..4 {
+            let frame = support::render_with(&scene, KernelOptions::default(), one_pass(seed));
+            let bad = frame
+                .image
+                .pixels
+                .iter()
+                .filter(|p| p.iter().any(|v| !v.is_finite()))
+                .count();
+            assert_eq!(bad, 0, "{shader}, seed {seed}: {bad} pixels not finite");
+        }
+    }
+}

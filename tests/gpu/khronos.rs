@@ -495,33 +495,58 @@ fn differing(a: &[[f32; 4]], b: &[[f32; 4]]) -> usize {
         .count()
 }
 
-/// gltfpack's variants of the Duck (tests/data/khronos/Duck/README.md),
-/// through the Duck's own camera: the quantized one renders as the plain
-/// file (99.5 % of pixels within 2e-3: positions, normals and uvs rounded
-/// to 8 to 16 bits), and so does the meshopt-compressed one (lossless, but
-/// its index codec may rotate a triangle's corners, which changes the
-/// order of the intersection's arithmetic, so not bit for bit).
+/// gltfpack's and Draco's variants of the Duck
+/// (tests/data/khronos/Duck/README.md), through the Duck's own camera: the
+/// quantized one renders as the plain file (99.5 % of pixels within 2e-3:
+/// positions, normals and uvs rounded to 8 to 16 bits), and so do the
+/// meshopt-compressed one (lossless, but its index codec may rotate a
+/// triangle's corners, which changes the order of the intersection's
+/// arithmetic, so not bit for bit) and the Draco-compressed one (Draco's
+/// quantization: 14 bits for positions, 10 for normals, 12 for uvs).
 #[test]
-fn quantized_and_meshopt_ducks_render_as_the_plain_duck() {
+fn quantized_meshopt_and_draco_ducks_render_as_the_plain_duck() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/khronos/Duck");
     let file = loaders::gltf::CameraChoice::File;
     let plain = render_file(&dir.join("Duck.gltf"), file.clone());
     let quantized = render_file(&dir.join("Duck_quantized.glb"), file.clone());
-    let meshopt = render_file(&dir.join("Duck_meshopt.glb"), file);
+    let meshopt = render_file(&dir.join("Duck_meshopt.glb"), file.clone());
+    let draco = render_file(&dir.join("Duck_draco.glb"), file);
+    for (name, variant) in [
+        ("quantized", &quantized),
+        ("meshopt", &meshopt),
+        ("draco", &draco),
+    ] {
+        assert_alike(&plain, name, variant);
+    }
+}
+
+/// `variant` renders as `plain` within the tolerance: 99.5 % of
+/// pixels within 2e-3; `plain` must show the model.
+fn assert_alike(plain: &[[f32; 4]], name: &str, variant: &[[f32; 4]]) {
     let hits = plain.iter().filter(|p| p[3] > 0.0).count();
     assert!(hits > 500, "{hits} hit pixels");
-    for (name, variant) in [("quantized", &quantized), ("meshopt", &meshopt)] {
-        let over = differing(&plain, variant);
-        eprintln!(
-            "{name}: {over} of {} pixels differ by more than 2e-3",
-            plain.len()
-        );
-        assert!(
-            over as f64 <= 0.005 * plain.len() as f64,
-            "{name}: {over} of {} pixels differ by more than 2e-3",
-            plain.len()
-        );
-    }
+    let over = differing(plain, variant);
+    eprintln!(
+        "{name}: {over} of {} pixels differ by more than 2e-3",
+        plain.len()
+    );
+    assert!(
+        over as f64 <= 0.005 * plain.len() as f64,
+        "{name}: {over} of {} pixels differ by more than 2e-3",
+        plain.len()
+    );
+}
+
+/// BoxTextured with its texture as a KTX2/Basis Universal UASTC image
+/// (KHR_texture_basisu, tests/data/khronos/BoxTextured/README.md) renders
+/// as the PNG original: 99.5 % of pixels within 2e-3.
+#[test]
+fn a_basisu_textured_box_renders_as_the_png_textured_box() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/khronos/BoxTextured");
+    let file = loaders::gltf::CameraChoice::File;
+    let plain = render_file(&dir.join("BoxTextured.gltf"), file.clone());
+    let basisu = render_file(&dir.join("BoxTextured_basisu_uastc.gltf"), file);
+    assert_alike(&plain, "uastc", &basisu);
 }
 
 /// BoxTextured drawn three times by EXT_mesh_gpu_instancing renders

@@ -8,14 +8,13 @@ use std::time::Instant;
 use penumbra::farm::batch::{self, BatchSettings, Outcome};
 use penumbra::render::Renderer;
 use penumbra::terminal;
-use penumbra::vector_width;
 
 use super::RenderArgs;
-use crate::cli::{exit_leaving_the_device, ms};
+use crate::cli::{calibrate, exit_leaving_the_device, ms};
 
 pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
-    vector_width::apply(args.vector_width, args.job());
+    let lavapipe = calibrate::settings(args.vector_width, args.job(), args.device.as_ref(), true)?;
     let settings = BatchSettings {
         load: args
             .limits
@@ -36,6 +35,7 @@ pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
         entries = batch::task_share(entries, t);
     }
     let mut renderer = Renderer::new(&args.renderer_options())?;
+    lavapipe.check_driver(renderer.device());
     let total = entries.len();
     let results = batch::run(&mut renderer, &entries, &settings, &mut |e, o| match o {
         Outcome::Rendered(d) => println!(
@@ -82,6 +82,10 @@ pub fn run(list: &Path, dir: &Path, args: &RenderArgs) -> anyhow::Result<()> {
             total - results.len()
         );
         exit_leaving_the_device(1);
+    }
+    if failed.is_empty() {
+        drop(renderer);
+        lavapipe.calibrate_if_due();
     }
     if !failed.is_empty() {
         anyhow::bail!(

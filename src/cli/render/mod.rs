@@ -20,6 +20,7 @@ use penumbra::terminal;
 use penumbra::vector_width;
 use penumbra::vulkan::DeviceSelector;
 
+use super::calibrate;
 use super::look::{DisplayArgs, LightingArgs};
 use super::{parse_seconds, renderer_options, side_parser, spp_parser, LimitArgs, Seconds};
 
@@ -88,9 +89,10 @@ pub struct RenderArgs {
     /// any of depth, normal, uv, id (comma-separated).
     #[arg(long)]
     aov: Option<output::AovSet>,
-    /// lavapipe's SIMD width in bits: `auto` takes 256 on any CPU with AVX
-    /// (the current kernel runs slower at 512 even with AVX-512);
-    /// LP_NATIVE_VECTOR_WIDTH in the environment takes precedence.
+    /// lavapipe's SIMD width in bits: `auto` takes what `penumbra calibrate`
+    /// measured fastest on this machine (a long render without calibration
+    /// calibrates after it), else 256 on any CPU with AVX; LP_NATIVE_VECTOR_WIDTH in the
+    /// environment takes precedence.
     #[arg(long, default_value = "auto", value_name = "auto|128|256|512")]
     vector_width: vector_width::Request,
     /// Render only tile I of N (bands of rows) into an OpenEXR part file
@@ -193,8 +195,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         part::check(&args, &out)?;
     }
     // Before the Vulkan driver loads (Renderer::new): lavapipe reads it then.
-    let vector_width =
-        (!args.reference).then(|| vector_width::apply(args.vector_width, args.job()));
+    // A long render with no calibration of this machine calibrates after it.
+    let settings = match args.reference {
+        true => None,
+        false => Some(calibrate::settings(
+            args.vector_width,
+            args.job(),
+            args.device.as_ref(),
+            true,
+        )?),
+    };
     // Refuse an unwritable output before spending time on the render.
     let format = output::check_writable(&out)?;
     if args.aov.is_some() && format != output::Format::Exr {
@@ -209,12 +219,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         true => None,
         false => Some(Renderer::new(&args.renderer_options())?),
     };
+    if let (Some(s), Some(r)) = (&settings, &renderer) {
+        s.check_driver(r.device());
+    }
+    let vector_width = settings.as_ref().map(|s| s.choice.clone());
     let (loaded, load) = load(&scene, &args, renderer.as_ref())?;
     match renderer.as_mut() {
         None => reference::run(&scene, &loaded, &args, &out, load),
         Some(r) if args.is_part() => part::run(r, &scene, &loaded, &args, &out, load),
         Some(r) => render_image(r, &scene, &loaded, &args, &out, load, vector_width),
+    }?;
+    // The device is closed before the calibration's probes open their own.
+    drop(renderer);
+    if let Some(s) = settings {
+        s.calibrate_if_due();
     }
+    Ok(())
 }
 
 /// Loads the scene within the device's limits and with the lighting flags,

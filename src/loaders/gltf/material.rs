@@ -82,6 +82,10 @@ const DEFAULT: Material = Material {
     specular_glossiness: None,
 };
 
+/// The extension that gives a texture a KTX2/Basis Universal image
+/// ([`crate::loaders::ktx2`]).
+pub(super) const BASISU: &str = "KHR_texture_basisu";
+
 /// The extensions whose meaning penumbra applies; every other one in
 /// `extensionsUsed` is named in a note.
 pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
@@ -437,7 +441,7 @@ impl Reader<'_> {
         field: &str,
     ) -> Result<(TextureId, Sampler)> {
         let sampler = sampler(&t.sampler());
-        let image = t.source().index();
+        let image = self.texture_image(t)?;
         if let Some(&id) = self.texture_ids.get(&(image, srgb)) {
             return Ok((id, sampler));
         }
@@ -445,6 +449,28 @@ impl Reader<'_> {
         let id = self.image(image, srgb)?;
         self.texture_ids.insert((image, srgb), id);
         Ok((id, sampler))
+    }
+
+    /// The image of texture `t`: its KHR_texture_basisu image where it
+    /// has one, else its `source`.
+    fn texture_image(&self, t: &gltf::Texture) -> Result<usize> {
+        let at = format!("textures[{}]", t.index());
+        let basisu = &self.raw_json()["textures"][t.index()]["extensions"][BASISU];
+        if basisu.is_object() {
+            return basisu["source"]
+                .as_u64()
+                .and_then(|i| usize::try_from(i).ok())
+                .ok_or_else(|| {
+                    let message = "must be the index of a KTX2 image";
+                    self.err(format!("{at}.extensions.{BASISU}.source"), message)
+                });
+        }
+        // Without `source` the crate reads u32::MAX, and `source()` panics.
+        let json = &self.document.as_json().textures[t.index()];
+        match json.source.value() {
+            i if i == u32::MAX as usize => self.fail(format!("{at}.source"), "is missing"),
+            i => Ok(i),
+        }
     }
 
     /// Decodes `images[i]` (a data: URI, a bufferView or a file next to

@@ -78,6 +78,19 @@ pub fn all() -> Vec<Seed> {
     for name in ["bunny.glb", "bunny_scene.glb"] {
         seeds.extend(file(Target::Glb, &r.join("scenes").join(name)));
     }
+    // A Draco-compressed mesh (KHR_draco_mesh_compression): the decoder
+    // reads untrusted bytes too.
+    seeds.extend(file(
+        Target::Glb,
+        &r.join("tests/data/khronos/Duck/Duck_draco.glb"),
+    ));
+    // KTX2 images of Basis Universal (KHR_texture_basisu), both codecs.
+    for name in ["CesiumLogoFlat_uastc.ktx2", "CesiumLogoFlat_etc1s.ktx2"] {
+        seeds.extend(file(
+            Target::Texture,
+            &r.join("tests/data/khronos/BoxTextured").join(name),
+        ));
+    }
     for name in shading_files() {
         seeds.extend(file(Target::Wgsl, &r.join("shaders/shading").join(name)));
     }

@@ -175,7 +175,7 @@ pub fn section(o: &mut String, r: &Results) {
     let _ = writeln!(
         o,
         "\nThe knob is the environment variable lavapipe reads when it loads (section 5); `penumbra render --vector-width auto` (`src/vector_width.rs`) {}; this CPU {}.\n",
-        auto_rule(penumbra::vector_width::WIDE_SPEEDUP),
+        auto_rule(),
         auto_width(r.cpu_info.avx512())
     );
     let _ = writeln!(o, "{}\n", machines_paragraph(r));

@@ -74,14 +74,9 @@ pub fn wide_vectors(avx512: bool, speedup: f64) -> &'static str {
     }
 }
 
-/// What `--vector-width auto` does, given the speed-up of 512-bit vectors
-/// that the renderer holds for its kernel (`vector_width::WIDE_SPEEDUP`).
-pub fn auto_rule(wide_speedup: f64) -> String {
-    if wide_speedup <= 1.0 {
-        format!("keeps 256 bits on every CPU with AVX: the current kernel runs slower at 512 bits even with AVX-512 (`WIDE_SPEEDUP` = {wide_speedup:.2}, measured on an AVX-512 machine; docs/drivers.md)")
-    } else {
-        "sets it to 512 only for long renders on a CPU with AVX-512".into()
-    }
+/// What `--vector-width auto` does: the calibration's choice (src/calibration).
+pub fn auto_rule() -> &'static str {
+    "takes the setting that `penumbra calibrate` measured fastest on the machine, the first long render calibrating after itself (512 bits for long renders only, AVX2 or AVX-512 code at 256 bits; docs/drivers.md, \"Calibration\", gives each candidate's speed on a machine), and 256 bits where nothing was measured"
 }
 
 /// Whether this CPU has what auto would use 512 bits on.
