@@ -1787,6 +1787,25 @@ fn unlit_materials_emit_by_vertex_colour() {
     assert!(!lit.emission_by_colour);
 }
 
+/// An occlusionTexture's KHR_texture_transform (read from the JSON, as the
+/// normal map's) and its texCoord override.
+#[test]
+fn occlusion_textures_take_their_texture_transform() {
+    let mut doc = material_doc(json!([{ "occlusionTexture": { "index": 0, "extensions": {
+        "KHR_texture_transform": { "offset": [0.25, 0.5], "texCoord": 1 } } } }]));
+    doc.root["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] =
+        doc.root["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].clone();
+    doc.root["textures"] = json!([{ "source": 0 }]);
+    doc.root["images"] = json!([{ "uri": png_uri(1, 1) }]);
+    doc.root["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    let scene = load_doc(&doc, &LoadOptions::default()).scene;
+    let (t, strength) = scene.objects[0].maps.occlusion.expect("occlusion");
+    assert_eq!(strength, 1.0, "glTF's default strength");
+    assert_eq!(t.tex_coord, 1);
+    assert_eq!(t.transform.offset, glam::DVec2::new(0.25, 0.5));
+    assert!(!scene.textures[t.texture].srgb, "occlusion is linear");
+}
+
 #[test]
 fn tangents_follow_the_node_transform_and_mirroring_flips_their_sign() {
     let mut doc = material_doc(json!([{ "normalTexture": { "index": 0 } }]));
