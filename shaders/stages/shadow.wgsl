@@ -107,8 +107,11 @@ fn queue_light_samples(pixel: u32, slot: u32, start: Hit, shading_normal: vec3<f
                 }
                 let ls = sample_light(light, start.position, shading_normal, to_eye, uv);
                 if dot(ls.to_light, shading_normal) > 0.0 && ls.falloff > 0.0 && dot(ls.to_light, start.geometric_normal) > 0.0 {
-                    traced += 1u;
-                    if !occluded(start, ls.to_light, ls.distance) {
+                    // Distance 0: a sample evaluated without visibility
+                    // (the environment), no shadow ray to trace or count.
+                    let traces = ls.distance > 0.0;
+                    traced += select(0u, 1u, traces);
+                    if !traces || !occluded(start, ls.to_light, ls.distance) {
                         to_light = ls.to_light;
                         falloff = ls.falloff;
                     }

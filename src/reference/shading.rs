@@ -134,7 +134,8 @@ pub fn blinn_phong_lobe(n: DVec3, l: DVec3, v: DVec3, shininess: f64) -> f64 {
 
 /// The colour at a hit: the emission once, then per light, `k_a·I_a` once,
 /// then per light sample (skipped where l·n ≤ 0 or the falloff is 0;
-/// otherwise one shadow ray, counted in `shadow_rays`)
+/// otherwise one shadow ray, counted in `shadow_rays`, unless the sample is
+/// evaluated without visibility)
 /// `falloff·(k_d·I_d·l·n + k_s·I_s·lobe)` if the sample is visible.
 /// `pixel` and `pass` pick the light samples and the shadow rays' `Blend`
 /// decisions. Where the hit has a surface, the Phong node's textures scale
@@ -241,9 +242,13 @@ pub fn shade(
             if ln <= 0.0 || ls.falloff <= 0.0 || ls.to_light.dot(hit.geometric_normal) <= 0.0 {
                 continue;
             }
-            *shadow_rays += 1;
-            if occluded(world, hit, &ls, shadow_ray) {
-                continue;
+            // Distance 0: evaluated without visibility (the environment),
+            // no shadow ray to cast or count (as on the GPU).
+            if ls.distance > 0.0 {
+                *shadow_rays += 1;
+                if occluded(world, hit, &ls, shadow_ray) {
+                    continue;
+                }
             }
             if let Some((c, metallic, roughness)) = pbr_f64 {
                 let (d, sp) = metallic_roughness::brdf(n, ls.to_light, v, c, metallic, roughness);

@@ -198,3 +198,25 @@ fn no_sample_of_glossy_materials_is_nan_where_the_light_comes_from_the_eye() {
         }
     }
 }
+
+/// The environment's samples are evaluated without visibility: they trace
+/// no shadow ray and the summary counts none, while a point light beside it
+/// still traces one per lit pixel.
+#[test]
+fn the_environment_traces_and_counts_no_shadow_rays() {
+    let shader = r#"{"type": "phong", "ambient": [0, 0, 0], "diffuse": [0.8, 0.8, 0.8], "specular": [0, 0, 0], "shininess": 1}"#;
+    let scene = support::load_json(&sphere_json(shader, 64));
+    let frame = support::render_with(&scene, KernelOptions::default(), one_pass(3));
+    let hits = frame.image.pixels.iter().filter(|p| p[3] == 1.0).count() as u64;
+    assert!(hits > 300, "{hits} hits");
+    assert_eq!(frame.stats.shadow_rays, 0);
+    // A point light at the eye lights every hit pixel (n·l > 0 wherever the
+    // camera sees the sphere): one shadow ray each.
+    let json = sphere_json(shader, 64).replace(
+        r#""lights": ["#,
+        r#""lights": [ { "type": "point", "position": [0, 0, 4], "intensity": 1 },"#,
+    );
+    let scene = support::load_json(&json);
+    let frame = support::render_with(&scene, KernelOptions::default(), one_pass(3));
+    assert_eq!(frame.stats.shadow_rays, hits);
+}
