@@ -7,27 +7,6 @@ use std::process::Command;
 
 use serde_json::{json, Value};
 
-/// Standard base64 with padding, for a data: URI.
-fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for k in 0..4 {
-            match k <= chunk.len() {
-                true => out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char),
-                false => out.push('='),
-            }
-        }
-    }
-    out
-}
-
 /// Renders `scene` at 48×36 into `dir` and returns its summary line.
 fn summary_of(scene: &Path, dir: &Path) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
@@ -60,7 +39,10 @@ fn the_summary_line_counts_instanced_triangles_and_texture_memory() {
         .flatten()
         .flat_map(|x| x.to_le_bytes())
         .collect();
-    let uri = format!("data:application/octet-stream;base64,{}", base64(&offsets));
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        crate::base64::encode(&offsets)
+    );
     gltf["buffers"]
         .as_array_mut()
         .unwrap()

@@ -6,6 +6,8 @@
 //!
 //! One concern: `cargo test --test cli bad_input::` (docs/tests.md).
 
+#[path = "../base64/mod.rs"]
+mod base64;
 #[path = "../watch_support/mod.rs"]
 mod watch_support;
 

@@ -129,7 +129,10 @@ impl Doc {
         let len = self.bin.len();
         match how {
             Container::Embedded => {
-                let uri = format!("data:application/octet-stream;base64,{}", base64(&self.bin));
+                let uri = format!(
+                    "data:application/octet-stream;base64,{}",
+                    crate::base64::encode(&self.bin)
+                );
                 root["buffers"] = json!([{ "byteLength": len, "uri": uri }]);
             }
             Container::External => {
@@ -153,27 +156,6 @@ impl Doc {
         };
         path
     }
-}
-
-pub(crate) fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 pub(crate) fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
@@ -1359,7 +1341,10 @@ pub(crate) fn png(w: u32, h: u32) -> Vec<u8> {
 }
 
 pub(crate) fn png_uri(w: u32, h: u32) -> String {
-    format!("data:image/png;base64,{}", base64(&png(w, h)))
+    format!(
+        "data:image/png;base64,{}",
+        crate::base64::encode(&png(w, h))
+    )
 }
 
 impl Doc {
@@ -1904,12 +1889,12 @@ fn bad_images_and_texture_references_name_the_file_and_field() {
     assert!(m.contains("missing.png"), "{m}");
     let mut corrupt = png(8, 8);
     corrupt.truncate(corrupt.len() / 2);
-    let uri = format!("data:image/png;base64,{}", base64(&corrupt));
+    let uri = format!("data:image/png;base64,{}", crate::base64::encode(&corrupt));
     let m = message(&with("/images/0/uri", json!(uri)), "images[0].uri");
     assert!(m.contains("corrupt"), "{m}");
     let gif = format!(
         "data:image/gif;base64,{}",
-        base64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")
+        crate::base64::encode(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")
     );
     let m = message(&with("/images/0/uri", json!(gif)), "images[0].uri");
     assert!(m.contains("PNG or JPEG"), "{m}");

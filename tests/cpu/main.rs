@@ -6,6 +6,8 @@
 //!
 //! One concept: `cargo test --test cpu gltf_loader::` (docs/tests.md).
 
+#[path = "../base64/mod.rs"]
+mod base64;
 mod brdf;
 mod docs;
 mod gltf_draco;

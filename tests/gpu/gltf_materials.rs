@@ -25,28 +25,6 @@ const TOL: f64 = 1e-4;
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 80;
 
-/// Standard base64 (RFC 4648, with padding).
-fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for i in 0..4 {
-            if i <= chunk.len() {
-                out.push(ABC[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 /// A 1×1 RGBA PNG of `rgba`.
 fn png(rgba: [u8; 4]) -> Vec<u8> {
     let mut out = Vec::new();
@@ -153,9 +131,9 @@ fn chart() -> String {
         nodes.join(", "),
         meshes.join(", "),
         materials.join(", "),
-        base64(&png(TEXEL)),
+        crate::base64::encode(&png(TEXEL)),
         buffer.len(),
-        base64(&buffer)
+        crate::base64::encode(&buffer)
     )
 }
 

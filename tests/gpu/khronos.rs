@@ -196,33 +196,6 @@ const TCT_QUADS: [TctQuad; 4] = [
     },
 ];
 
-/// Standard base64 (RFC 4648) with `=` padding: the test decodes the
-/// model's embedded PNG itself, apart from the loader.
-fn base64_decode(text: &str) -> Vec<u8> {
-    let value = |c: u8| -> u32 {
-        match c {
-            b'A'..=b'Z' => u32::from(c - b'A'),
-            b'a'..=b'z' => u32::from(c - b'a') + 26,
-            b'0'..=b'9' => u32::from(c - b'0') + 52,
-            b'+' => 62,
-            b'/' => 63,
-            _ => panic!("not base64: {c}"),
-        }
-    };
-    let digits: Vec<u8> = text.bytes().filter(|&c| c != b'=').collect();
-    let mut out = Vec::with_capacity(digits.len() * 3 / 4);
-    for chunk in digits.chunks(4) {
-        let mut acc = 0u32;
-        for &c in chunk {
-            acc = (acc << 6) | value(c);
-        }
-        acc <<= 6 * (4 - chunk.len() as u32);
-        let bytes = acc.to_be_bytes();
-        out.extend_from_slice(&bytes[1..chunk.len()]);
-    }
-    out
-}
-
 /// Fraction of the variance of `y` that the least-squares line `a + b·x`
 /// explains (the coefficient of determination R²), and the slope b.
 fn r_squared(x: &[f64], y: &[f64]) -> (f64, f64) {
@@ -283,7 +256,7 @@ fn texture_coordinate_test_is_upright() {
     let text = std::fs::read_to_string(&path).expect("read");
     let json: serde_json::Value = serde_json::from_str(&text).expect("json");
     let uri = json["images"][0]["uri"].as_str().expect("image uri");
-    let png = base64_decode(uri.strip_prefix("data:image/png;base64,").expect("png uri"));
+    let png = crate::base64::decode(uri.strip_prefix("data:image/png;base64,").expect("png uri"));
     let tex = image::load_from_memory(&png).expect("png").to_rgba8();
     assert_eq!(tex.dimensions(), (512, 512));
     let linear: Vec<f64> = tex
@@ -579,7 +552,7 @@ fn instanced_boxes_render_as_the_boxes_written_as_nodes() {
         .flatten()
         .flat_map(|x| x.to_le_bytes())
         .collect();
-    let b64 = base64_encode(&bytes);
+    let b64 = crate::base64::encode(&bytes);
     instanced["buffers"].as_array_mut().unwrap().push(
         json!({ "byteLength": 36, "uri": format!("data:application/octet-stream;base64,{b64}") }),
     );
@@ -602,25 +575,4 @@ fn instanced_boxes_render_as_the_boxes_written_as_nodes() {
     let b = render_file(&instanced_path, framing);
     assert!(a.iter().filter(|p| p[3] > 0.0).count() > 1000);
     assert_eq!(differing(&a, &b), 0);
-}
-
-/// Standard base64 with padding.
-fn base64_encode(bytes: &[u8]) -> String {
-    const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-        for k in 0..4 {
-            match k <= chunk.len() {
-                true => out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char),
-                false => out.push('='),
-            }
-        }
-    }
-    out
 }

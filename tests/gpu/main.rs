@@ -8,6 +8,8 @@
 //!
 //! One concept: `cargo test --test gpu shading::` (docs/tests.md).
 
+#[path = "../base64/mod.rs"]
+mod base64;
 mod support;
 mod vulkan_kernel;
 #[path = "../watch_support/mod.rs"]
