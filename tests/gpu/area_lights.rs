@@ -6,24 +6,11 @@ use crate::support;
 
 use std::f64::consts::PI;
 
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use penumbra::render::{KernelOptions, Sampler, Sampling};
 use penumbra::scene::{
-    Camera, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, Shape, Triangle,
+    Camera, Light, LightKind, Object, Phong, Plane, Scene, Shader, Shape, Triangle,
 };
-
-/// Orthographic camera at height 1 looking straight down (−Y) at the plane
-/// y = 0 (below any occluder of these tests), image up = −Z, covering x, z in
-/// [−half, half].
-fn top_down(half: f64, px: u32) -> Camera {
-    Camera {
-        position: DVec3::new(0.0, 1.0, 0.0),
-        orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
-        projection: Projection::Orthographic { half_height: half },
-        width: px,
-        height: px,
-    }
-}
 
 /// World point (x, 0, z) seen at the centre of pixel (i, j) of `top_down`.
 fn pixel_point(half: f64, px: u32, i: u32, j: u32) -> DVec3 {
@@ -97,7 +84,10 @@ fn convergence_error(samples: u32, sampler: Sampler) -> f64 {
     let (half, px) = (1.0, 24);
     let corner = DVec3::new(-0.5, 1.0, -0.5);
     let (e1, e2) = (DVec3::X, DVec3::Z); // e1 × e2 = −Y: emits downwards
-    let scene = lambert_plane(top_down(half, px), vec![rect(corner, e1, e2, samples)]);
+    let scene = lambert_plane(
+        support::top_down(half, px),
+        vec![rect(corner, e1, e2, samples)],
+    );
     let kernel = KernelOptions {
         sampler,
         ..Default::default()
@@ -188,7 +178,7 @@ fn penumbra_scene(with_occluder: bool) -> Scene {
     }
     Scene {
         textures: vec![],
-        camera: top_down(2.0, 200),
+        camera: support::top_down(2.0, 200),
         background: Vec3::ZERO,
         shaders: vec![white_lambert()],
         objects,
@@ -329,7 +319,7 @@ fn sphere_light_far_away_acts_like_a_point_light() {
     // N points of I/N on a small sphere converge to a point light of I at its
     // centre (no emitter cosine for spheres).
     let mut scene = lambert_plane(
-        top_down(1.0, 16),
+        support::top_down(1.0, 16),
         vec![Light {
             kind: LightKind::Sphere {
                 center: DVec3::new(0.3, 3.0, -0.2),
@@ -376,7 +366,7 @@ fn environment_light_on_a_plane() {
     let intensity = 1.5f32;
     let (samples, spp) = (1024u32, 4u32);
     let mut scene = lambert_plane(
-        top_down(1.0, 16),
+        support::top_down(1.0, 16),
         vec![Light {
             kind: LightKind::Environment { up, samples },
             intensity,

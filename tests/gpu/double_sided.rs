@@ -5,10 +5,9 @@
 //! straight above; the quad faces up (its counter-clockwise front, the side
 //! of (v1 − v0) × (v2 − v0)) or, flipped, down.
 
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use penumbra::scene::{
-    Camera, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, Shape, SurfaceMaps,
-    Triangle,
+    Light, LightKind, Object, Phong, Plane, Scene, Shader, Shape, SurfaceMaps, Triangle,
 };
 
 use crate::support;
@@ -56,13 +55,7 @@ pub fn scene(flipped: bool, double_sided: bool) -> Scene {
     }));
     Scene {
         textures: vec![],
-        camera: Camera {
-            position: DVec3::new(0.0, 1.0, 0.0),
-            orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
-            projection: Projection::Orthographic { half_height: 1.0 },
-            width: 32,
-            height: 32,
-        },
+        camera: support::top_down(1.0, 32),
         background: Vec3::new(0.2, 0.2, 0.2),
         shaders: vec![lambert([0.0, 0.0, 0.8]), lambert([0.8, 0.0, 0.0])],
         objects,

@@ -7,11 +7,11 @@
 //! render is compared, pixel by pixel, with the same scene without
 //! occlusion textures: same seed, so the same environment directions.
 
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use penumbra::render::Image;
 use penumbra::scene::{
-    Camera, Light, LightKind, Object, Phong, Projection, Scene, Shader, Shape, SurfaceMaps,
-    Texture, TextureRef, Triangle,
+    Light, LightKind, Object, Phong, Scene, Shader, Shape, SurfaceMaps, Texture, TextureRef,
+    Triangle,
 };
 
 use crate::support;
@@ -91,13 +91,7 @@ pub fn scene(lights: Lights, strength: Option<f32>) -> Scene {
             Some(_) => vec![texture(LEFT_R), texture(255)],
             None => vec![],
         },
-        camera: Camera {
-            position: DVec3::new(0.0, 0.0, 5.0),
-            orientation: DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::Z),
-            projection: Projection::Orthographic { half_height: 1.0 },
-            width: WIDTH,
-            height: HEIGHT,
-        },
+        camera: support::front_on(1.0, WIDTH, HEIGHT),
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
             textures: Default::default(),

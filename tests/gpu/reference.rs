@@ -35,12 +35,10 @@ use crate::support;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::{Frame, Image, KernelOptions, Sampler, Sampling};
-use penumbra::scene::{
-    Camera, Light, LightKind, Object, Phong, Plane, Projection, Scene, Shader, Shape, Triangle,
-};
+use penumbra::scene::{Light, LightKind, Object, Phong, Plane, Scene, Shader, Shape, Triangle};
 
 /// Largest per-channel difference of an agreeing pixel (see the module docs).
 const TOL: f64 = 2e-3;
@@ -170,13 +168,7 @@ fn sampling_scene(samples: u32) -> Scene {
     };
     Scene {
         textures: vec![],
-        camera: Camera {
-            position: DVec3::new(0.0, 1.0, 0.0),
-            orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
-            projection: Projection::Orthographic { half_height: 1.0 },
-            width: 48,
-            height: 48,
-        },
+        camera: support::top_down(1.0, 48),
         background: Vec3::ZERO,
         shaders: vec![lambert(1.0), lambert(0.5)],
         objects: vec![

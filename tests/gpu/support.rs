@@ -149,3 +149,29 @@ pub fn bunny_counts(image: &penumbra::render::Image) -> [usize; 4] {
         count(&|r| r == 0.05),
     ]
 }
+
+/// Orthographic camera at height 1 looking straight down (−Y) at the plane
+/// y = 0, image up = −Z, covering x, z in [−half, half], `px` pixels square.
+pub fn top_down(half: f64, px: u32) -> penumbra::scene::Camera {
+    use glam::{DMat3, DVec3};
+    penumbra::scene::Camera {
+        position: DVec3::new(0.0, 1.0, 0.0),
+        orientation: DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
+        projection: penumbra::scene::Projection::Orthographic { half_height: half },
+        width: px,
+        height: px,
+    }
+}
+
+/// Orthographic camera at z = 5 looking along −Z (image right +X, up +Y),
+/// covering y in [−half, half], `width` × `height` pixels.
+pub fn front_on(half: f64, width: u32, height: u32) -> penumbra::scene::Camera {
+    use glam::{DMat3, DVec3};
+    penumbra::scene::Camera {
+        position: DVec3::new(0.0, 0.0, 5.0),
+        orientation: DMat3::IDENTITY,
+        projection: penumbra::scene::Projection::Orthographic { half_height: half },
+        width,
+        height,
+    }
+}

@@ -112,13 +112,7 @@ fn quad(uv_max: DVec2) -> Mesh {
 fn scene(mesh: Mesh, n: u32, diffuse: TextureRef, textures: Vec<Texture>) -> Scene {
     Scene {
         textures,
-        camera: Camera {
-            position: DVec3::new(0.0, 0.0, 5.0),
-            orientation: DMat3::IDENTITY,
-            projection: Projection::Orthographic { half_height: 1.0 },
-            width: n,
-            height: n,
-        },
+        camera: support::front_on(1.0, n, n),
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
             ambient: Vec3::ZERO,

@@ -6,8 +6,8 @@
 //! seen head-on by an orthographic camera along −Z with no light: the centre
 //! pixel is the colour interpolated at the image's centre.
 
-use glam::{DMat3, DVec2, DVec3, Vec3};
-use penumbra::scene::{Camera, Mesh, Object, Phong, Projection, Scene, Shader, Shape, SurfaceMaps};
+use glam::{DVec2, DVec3, Vec3};
+use penumbra::scene::{Mesh, Object, Phong, Scene, Shader, Shape, SurfaceMaps};
 
 use crate::support;
 
@@ -31,13 +31,7 @@ pub fn scene(emission_by_colour: bool) -> Scene {
     };
     Scene {
         textures: vec![],
-        camera: Camera {
-            position: DVec3::new(0.0, 0.0, 5.0),
-            orientation: DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::Z),
-            projection: Projection::Orthographic { half_height: 2.0 },
-            width: SIZE,
-            height: SIZE,
-        },
+        camera: support::front_on(2.0, SIZE, SIZE),
         background: Vec3::ZERO,
         shaders: vec![Shader::Phong(Phong {
             textures: Default::default(),
