@@ -94,6 +94,13 @@ fn penumbra_fetch(u: penumbra_TextureUse, base: u32, size: vec2<u32>, x: i32, y:
 
 // Level `level` of use `u` at transformed coordinates `st`: the texel that
 // holds the point, or bilinear between the four texel centres around it.
+//
+// The taps are a loop whose body fetches once, not four inlined fetches:
+// lavapipe inlines every call, so each copy of `penumbra_fetch` (two wraps
+// and a texel load) is compiled again, and a loop's body only once (issue
+// 39: the driver compile of a textured shade pipeline). The mixes are the
+// same operations on the same values as `mix(mix(t00, t10, w.x), mix(t01,
+// t11, w.x), w.y)`, so the results are bit-identical.
 fn penumbra_sample_level(u: penumbra_TextureUse, level: u32, st: vec2<f32>, linear: bool) -> vec4<f32> {
     var base = u.base;
     var size = u.size;
@@ -102,23 +109,41 @@ fn penumbra_sample_level(u: penumbra_TextureUse, level: u32, st: vec2<f32>, line
         size = max(size >> vec2<u32>(1u), vec2<u32>(1u));
     }
     let p = st * vec2<f32>(size);
-    if !linear {
-        let f = floor(p);
-        return penumbra_fetch(u, base, size, i32(f.x), i32(f.y));
-    }
-    let q = p - 0.5;
+    // Nearest: one tap, the texel that holds the point; bilinear: four, from
+    // the texel centre below and left of it.
+    let q = select(p, p - 0.5, linear);
     let f = floor(q);
     let w = q - f;
     let x = i32(f.x);
     let y = i32(f.y);
-    let top = mix(penumbra_fetch(u, base, size, x, y), penumbra_fetch(u, base, size, x + 1, y), w.x);
-    let bottom = mix(penumbra_fetch(u, base, size, x, y + 1), penumbra_fetch(u, base, size, x + 1, y + 1), w.x);
+    let taps = select(1u, 4u, linear);
+    var top = vec4<f32>(0.0);
+    var bottom = vec4<f32>(0.0);
+    for (var k = 0u; k < taps; k++) {
+        let texel = penumbra_fetch(u, base, size, x + i32(k & 1u), y + i32(k >> 1u));
+        if k == 0u {
+            top = texel;
+        } else if k == 1u {
+            top = mix(top, texel, w.x);
+        } else if k == 2u {
+            bottom = texel;
+        } else {
+            bottom = mix(bottom, texel, w.x);
+        }
+    }
+    if !linear {
+        return top;
+    }
     return mix(top, bottom, w.y);
 }
 
 // Texture use `t` at texture coordinates `uv`, whose geometric level of
 // detail is `lambda` (ray cones, without the texture's own terms; -inf or
 // NaN magnifies): linear RGBA, or (1, 1, 1, 1) for no texture.
+//
+// Which levels and filter the use's modes choose is decided first, then
+// one loop samples them (one level, or two for trilinear): one inlined
+// copy of the sampling code instead of one per case (issue 39).
 fn penumbra_texture_lod(t: u32, uv: vec2<f32>, lambda: f32) -> vec4<f32> {
     if t == penumbra_NO_TEXTURE {
         return vec4<f32>(1.0);
@@ -126,23 +151,38 @@ fn penumbra_texture_lod(t: u32, uv: vec2<f32>, lambda: f32) -> vec4<f32> {
     let u = penumbra_texture_use(t);
     let st = vec2<f32>(dot(u.row0.xy, uv) + u.row0.z, dot(u.row1.xy, uv) + u.row1.z);
     let l = lambda + u.lod_bias;
-    if !(l > 0.0) {
-        return penumbra_sample_level(u, 0u, st, (u.flags & penumbra_TEXTURE_MAG_LINEAR) != 0u);
+    // Magnified: level 0 with the magnification filter.
+    var linear = (u.flags & penumbra_TEXTURE_MAG_LINEAR) != 0u;
+    var level = 0u;
+    var levels = 1u;
+    var lo = 0.0;
+    if l > 0.0 {
+        linear = (u.flags & penumbra_TEXTURE_MIN_LINEAR) != 0u;
+        let mip = (u.flags >> penumbra_TEXTURE_MIP_SHIFT) & 3u;
+        let last = f32(u.levels - 1u);
+        if mip == 1u {
+            level = u32(min(round(l), last));
+        } else if mip != 0u {
+            lo = min(floor(l), last);
+            level = u32(lo);
+            // Between two levels, unless past the last.
+            if lo < last {
+                levels = 2u;
+            }
+        }
     }
-    let min_linear = (u.flags & penumbra_TEXTURE_MIN_LINEAR) != 0u;
-    let mip = (u.flags >> penumbra_TEXTURE_MIP_SHIFT) & 3u;
-    let last = f32(u.levels - 1u);
-    if mip == 0u {
-        return penumbra_sample_level(u, 0u, st, min_linear);
+    var a = vec4<f32>(0.0);
+    var b = vec4<f32>(0.0);
+    for (var i = 0u; i < levels; i++) {
+        let s = penumbra_sample_level(u, level + i, st, linear);
+        if i == 0u {
+            a = s;
+        } else {
+            b = s;
+        }
     }
-    if mip == 1u {
-        return penumbra_sample_level(u, u32(min(round(l), last)), st, min_linear);
+    if levels == 1u {
+        return a;
     }
-    let lo = min(floor(l), last);
-    if lo >= last {
-        return penumbra_sample_level(u, u32(last), st, min_linear);
-    }
-    let a = penumbra_sample_level(u, u32(lo), st, min_linear);
-    let b = penumbra_sample_level(u, u32(lo) + 1u, st, min_linear);
     return mix(a, b, l - lo);
 }
