@@ -69,16 +69,19 @@ fn penumbra_texture_set(t: u32) -> u32 {
     return select(0u, 1u, (flags & penumbra_TEXTURE_SET_1) != 0u);
 }
 
-// Texel index `i` wrapped into 0..n by `mode` (scene::Wrap::apply).
+// Texel index `i` wrapped into 0..n by `mode` (scene::Wrap::apply). Repeat
+// and mirrored repeat share one remainder (of the period n or 2n, made
+// non-negative): every `%` is a guarded division that lavapipe compiles at
+// each inlined copy (issue 39).
 fn penumbra_wrap(i: i32, n: i32, mode: u32) -> i32 {
-    if mode == 0u {
-        return ((i % n) + n) % n;
+    if mode > 1u {
+        return clamp(i, 0, n - 1);
     }
-    if mode == 1u {
-        let m = ((i % (2 * n)) + 2 * n) % (2 * n);
-        return select(2 * n - 1 - m, m, m < n);
-    }
-    return clamp(i, 0, n - 1);
+    let mirrored = mode == 1u;
+    let period = select(n, 2 * n, mirrored);
+    let r = i % period;
+    let m = select(r, r + period, r < 0);
+    return select(m, 2 * n - 1 - m, mirrored && m >= n);
 }
 
 // Texel (x, y) of the level that starts at word `base` and is `size`
