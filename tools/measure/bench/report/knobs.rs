@@ -40,6 +40,68 @@ pub fn section(o: &mut String, r: &Results) {
         );
     }
     let _ = writeln!(o);
+    calibration_paragraph(o, r);
+}
+
+/// What `penumbra calibrate` would choose from this run's knob times
+/// (`penumbra::calibration::decide`, the rule the CLI applies to its own
+/// probe's times), so the report states the choice beside the candidates'
+/// speeds it comes from.
+fn calibration_paragraph(o: &mut String, r: &Results) {
+    use penumbra::calibration::{candidates, decide, Candidate, Measured, MARGIN};
+    use penumbra::vector_width::{CpuVectors, Job};
+    let cpu = CpuVectors {
+        avx: r.cpu_info.isa.iter().any(|f| f == "avx"),
+        avx512f: r.cpu_info.avx512_in_use(),
+    };
+    if candidates(cpu).is_empty() {
+        let _ = writeln!(
+            o,
+            "**Calibration** (`penumbra calibrate`, docs/drivers.md): this CPU has no AVX-512 in use, so there is nothing to choose: 512-bit vectors would be emulated with two 256-bit registers and AVX2 code is the only code. Every render runs at lavapipe's default, 256 bits.\n"
+        );
+        return;
+    }
+    let env_of = |c: Candidate| -> Vec<(String, String)> {
+        match c {
+            Candidate::Wide256 => vec![("LP_NATIVE_VECTOR_WIDTH".into(), "256".into())],
+            Candidate::Wide512 => vec![("LP_NATIVE_VECTOR_WIDTH".into(), "512".into())],
+            Candidate::Avx2At256 => vec![(
+                crate::parts::knobs::AVX2_CAP.0.into(),
+                crate::parts::knobs::AVX2_CAP.1.into(),
+            )],
+        }
+    };
+    let measured: Vec<Measured> = Candidate::ALL
+        .iter()
+        .filter_map(|&c| {
+            let k = r.knobs.iter().find(|k| k.env == env_of(c))?;
+            Measured::of(c, &k.render_ms.samples)
+        })
+        .collect();
+    let long = Job::Render {
+        pixels: None,
+        passes: u32::MAX,
+        time_budget: None,
+    };
+    let name = |c: Candidate| format!("`{}` ({})", c.name(), c.describe());
+    match (decide(&measured, long), decide(&measured, Job::Watch)) {
+        (Some(l), Some(w)) => {
+            let _ = writeln!(
+                o,
+                "**Calibration** (`penumbra calibrate`, docs/drivers.md), applied to the rows above (`calibration::decide`: the fastest candidate whose median frame beats 256 bits by at least {:.0} %, 512 bits for long renders only): long renders would run with **{}**, {:.2}× as fast as the default; short renders and `watch` with **{}**. `penumbra calibrate` measures its own scene in its own processes and may differ by a few per cent.\n",
+                (MARGIN - 1.0) * 100.0,
+                name(l.candidate),
+                l.speedup,
+                name(w.candidate),
+            );
+        }
+        _ => {
+            let _ = writeln!(
+                o,
+                "**Calibration**: no choice: the 256-bit row is missing from this run.\n"
+            );
+        }
+    }
 }
 
 /// Issue 16's target for every lavapipe a user is likely to have, Mesa 22.3
