@@ -150,6 +150,97 @@ pub fn linear_to_srgb8(c: f64) -> u8 {
     (s * 255.0).round() as u8
 }
 
+/// The mean of four 8-bit linear values, rounded to nearest (ties up): the
+/// plain formula `round((a/255 + b/255 + c/255 + d/255) / 4 · 255)` in
+/// `f64`, without it where the sum leaves no tie. Away from a tie the mean
+/// is at least ¼ from a rounding boundary, far beyond the formula's
+/// rounding errors (about 1e-13), so the integer mean is the same; at a
+/// tie (a sum ≡ 2 mod 4) the formula itself decides, as it did.
+pub fn linear_mean8(q: [u8; 4]) -> u8 {
+    let sum = q.map(u32::from).iter().sum::<u32>();
+    if sum % 4 != 2 {
+        return ((sum + 2) / 4) as u8;
+    }
+    let unorm = |b: u8| f64::from(b) / 255.0;
+    let mean = (unorm(q[0]) + unorm(q[1]) + unorm(q[2]) + unorm(q[3])) / 4.0;
+    (mean * 255.0).round() as u8
+}
+
+/// [`linear_to_srgb8`] without a `powf`: the mip chain's sRGB encode
+/// (issue 39). For every code `k` in 1..=255, the smallest `f64` that
+/// [`linear_to_srgb8`] encodes to `k` or more, found once by a binary
+/// search over the bit patterns of the doubles in [0, 1] (which order as
+/// their values do); a value's code is then the number of thresholds at or
+/// below it, which is [`linear_to_srgb8`]'s own result wherever that is
+/// non-decreasing (the test `srgb8_encoder_is_linear_to_srgb8` checks it
+/// around every threshold and on random values).
+#[derive(Debug)]
+pub struct Srgb8Encoder {
+    /// `bounds[k]` for `k` ≥ 1: the threshold of code `k`, times 4 (the
+    /// sum of four values, whose mean is encoded); `bounds[0]` is −∞.
+    bounds: [f64; 256],
+    /// [`srgb_to_linear`] of each byte.
+    linear: [f64; 256],
+}
+
+impl Srgb8Encoder {
+    /// The thresholds, computed on first use.
+    pub fn get() -> &'static Srgb8Encoder {
+        static ENCODER: std::sync::OnceLock<Srgb8Encoder> = std::sync::OnceLock::new();
+        ENCODER.get_or_init(|| {
+            let mut bounds = [f64::NEG_INFINITY; 256];
+            for (k, bound) in bounds.iter_mut().enumerate().skip(1) {
+                // The least x in [0, 1] with linear_to_srgb8(x) ≥ k
+                // (linear_to_srgb8(1) = 255, so there is one).
+                let (mut lo, mut hi) = (0u64, 1.0f64.to_bits());
+                while lo < hi {
+                    let mid = lo + (hi - lo) / 2;
+                    if usize::from(linear_to_srgb8(f64::from_bits(mid))) >= k {
+                        hi = mid;
+                    } else {
+                        lo = mid + 1;
+                    }
+                }
+                *bound = 4.0 * f64::from_bits(lo);
+            }
+            Srgb8Encoder {
+                bounds,
+                linear: std::array::from_fn(|b| srgb_to_linear(b as u8)),
+            }
+        })
+    }
+
+    /// [`linear_to_srgb8`] of `x` in [0, 1].
+    pub fn encode(&self, x: f64) -> u8 {
+        self.encode_sum(4.0 * x)
+    }
+
+    /// [`linear_to_srgb8`] of `sum / 4` (exact: a power of two).
+    fn encode_sum(&self, sum: f64) -> u8 {
+        let mut k = 0;
+        for step in [128, 64, 32, 16, 8, 4, 2, 1] {
+            if self.bounds[k + step] <= sum {
+                k += step;
+            }
+        }
+        k as u8
+    }
+
+    /// The mip texel over four texels of an sRGB texture: RGB the mean in
+    /// linear light re-encoded to sRGB, alpha the linear mean
+    /// ([`linear_mean8`]).
+    pub fn mean(&self, q: [[u8; 4]; 4]) -> [u8; 4] {
+        let l = |t: [u8; 4], c: usize| self.linear[usize::from(t[c])];
+        let rgb = |c| self.encode_sum(l(q[0], c) + l(q[1], c) + l(q[2], c) + l(q[3], c));
+        [
+            rgb(0),
+            rgb(1),
+            rgb(2),
+            linear_mean8([q[0][3], q[1][3], q[2][3], q[3][3]]),
+        ]
+    }
+}
+
 impl Texture {
     /// The mip chain, level 0 first, down to 1×1 (module docs: how each
     /// level is made).
@@ -189,42 +280,39 @@ impl Texture {
     /// The level after a `width` × `height` level of `texels`: each texel
     /// the mean of the four under it (edges clamped), in linear light for
     /// the colour channels of an sRGB texture.
+    ///
+    /// Bit for bit what the plain formula gives (the test `half_is_the_plain_formula`
+    /// keeps it as the reference): the colour channels of an sRGB texture sum
+    /// the same four `f64` values of [`srgb_to_linear`] in the same order
+    /// and encode the mean by [`Srgb8Encoder`]'s exact thresholds instead of
+    /// a `powf` (issue 39: the `powf` and `round` were most of the mip
+    /// chain's time); linear channels take the integer mean
+    /// ([`linear_mean8`]). Rows in parallel: no level depends on the order.
     fn half(&self, width: u32, height: u32, texels: &[[u8; 4]]) -> MipLevel {
         use rayon::prelude::*;
         let (w, h) = ((width / 2).max(1), (height / 2).max(1));
-        // The same values as `srgb_to_linear` (a table, not a `powf` per
-        // texel and channel), and rows in parallel (issue 39): the levels
-        // do not depend on the order.
-        let linear: [f64; 256] = std::array::from_fn(|b| srgb_to_linear(b as u8));
-        let unorm: [f64; 256] = std::array::from_fn(|b| b as f64 / 255.0);
-        let mut out = vec![[0u8; 4]; (w * h) as usize];
+        let encoder = Srgb8Encoder::get();
+        let srgb = self.srgb;
+        let (width, height) = (width as usize, height as usize);
+        let mut out = vec![[0u8; 4]; w as usize * h as usize];
         out.par_chunks_mut(w as usize)
             .enumerate()
             .for_each(|(y, row)| {
-                let y = y as u32;
+                let y0 = (2 * y).min(height - 1);
+                let y1 = (2 * y + 1).min(height - 1);
+                let top = &texels[y0 * width..(y0 + 1) * width];
+                let bottom = &texels[y1 * width..(y1 + 1) * width];
                 for (x, texel) in row.iter_mut().enumerate() {
-                    let x = x as u32;
-                    let mut sum = [0.0f64; 4];
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let sx = (2 * x + dx).min(width - 1);
-                        let sy = (2 * y + dy).min(height - 1);
-                        let t = texels[(sy * width + sx) as usize];
-                        for (c, s) in sum.iter_mut().enumerate() {
-                            *s += if self.srgb && c < 3 {
-                                linear[t[c] as usize]
-                            } else {
-                                unorm[t[c] as usize]
-                            };
-                        }
-                    }
-                    *texel = std::array::from_fn(|c| {
-                        let mean = sum[c] / 4.0;
-                        if self.srgb && c < 3 {
-                            linear_to_srgb8(mean)
-                        } else {
-                            (mean * 255.0).round() as u8
-                        }
-                    });
+                    let x0 = (2 * x).min(width - 1);
+                    let x1 = (2 * x + 1).min(width - 1);
+                    // The order of the sum: (0, 0), (1, 0), (0, 1), (1, 1).
+                    let q = [top[x0], top[x1], bottom[x0], bottom[x1]];
+                    *texel = match srgb {
+                        true => encoder.mean(q),
+                        false => std::array::from_fn(|c| {
+                            linear_mean8([q[0][c], q[1][c], q[2][c], q[3][c]])
+                        }),
+                    };
                 }
             });
         MipLevel {
@@ -543,6 +631,145 @@ mod tests {
             .map(|l| (l.width, l.height))
             .collect();
         assert_eq!(sizes, [(5, 3), (2, 1), (1, 1)]);
+    }
+
+    /// The mip level as it was made before issue 39's faster `half`: the
+    /// plain formula, with a `powf` per sRGB channel. The reference the new
+    /// code must match bit for bit.
+    fn half_plain(t: &Texture, width: u32, height: u32, texels: &[[u8; 4]]) -> Vec<[u8; 4]> {
+        let (w, h) = ((width / 2).max(1), (height / 2).max(1));
+        let mut out = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0.0f64; 4];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let sx = (2 * x + dx).min(width - 1);
+                    let sy = (2 * y + dy).min(height - 1);
+                    let p = texels[(sy * width + sx) as usize];
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += if t.srgb && c < 3 {
+                            srgb_to_linear(p[c])
+                        } else {
+                            f64::from(p[c]) / 255.0
+                        };
+                    }
+                }
+                out.push(std::array::from_fn(|c| {
+                    let mean = sum[c] / 4.0;
+                    if t.srgb && c < 3 {
+                        linear_to_srgb8(mean)
+                    } else {
+                        (mean * 255.0).round() as u8
+                    }
+                }));
+            }
+        }
+        out
+    }
+
+    /// A xorshift generator: the same pseudo-random bytes on every run.
+    fn xorshift(state: &mut u64) -> u64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        *state
+    }
+
+    #[test]
+    fn half_is_the_plain_formula() {
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        for (width, height) in [(64, 64), (37, 23), (1, 5), (6, 1), (129, 2)] {
+            for srgb in [true, false] {
+                // Noise, and smooth ramps (where sums tie most often).
+                for smooth in [false, true] {
+                    let texels = (0..width * height)
+                        .map(|i| match smooth {
+                            false => xorshift(&mut rng).to_le_bytes()[..4].try_into().unwrap(),
+                            true => {
+                                let (x, y) = (i % width, i / width);
+                                [x as u8, y as u8, (x + y) as u8, (3 * x) as u8]
+                            }
+                        })
+                        .collect();
+                    let t = Texture {
+                        label: "t".into(),
+                        file: None,
+                        width,
+                        height,
+                        texels,
+                        srgb,
+                    };
+                    let mut prev = t.clone().texels;
+                    let (mut w, mut h) = (width, height);
+                    let chain = t.mip_chain();
+                    for level in &chain[1..] {
+                        let plain = half_plain(&t, w, h, &prev);
+                        assert!(
+                            level.texels == plain,
+                            "{width}×{height} srgb {srgb}: level {}×{}",
+                            level.width,
+                            level.height
+                        );
+                        (w, h, prev) = (level.width, level.height, level.texels.clone());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn linear_mean_is_the_plain_formula() {
+        let plain = |q: [u8; 4]| {
+            let sum: f64 = q.iter().map(|&b| f64::from(b) / 255.0).sum();
+            ((sum / 4.0) * 255.0).round() as u8
+        };
+        // Every pair of bytes for the first two, with a spread of the last two.
+        let mut rng = 7u64;
+        let tails: Vec<[u8; 2]> = (0..24)
+            .map(|_| xorshift(&mut rng).to_le_bytes()[..2].try_into().unwrap())
+            .chain([[0, 0], [255, 255], [0, 255], [1, 2]])
+            .collect();
+        for a in 0..=255u8 {
+            for b in 0..=255u8 {
+                for &[c, d] in &tails {
+                    assert_eq!(
+                        linear_mean8([a, b, c, d]),
+                        plain([a, b, c, d]),
+                        "{a} {b} {c} {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn srgb8_encoder_is_linear_to_srgb8() {
+        let e = Srgb8Encoder::get();
+        // Around every threshold, ulp by ulp, where a wrong one would show.
+        for k in 1..=255usize {
+            let at = (e.bounds[k] / 4.0).to_bits();
+            for bits in at - 300..at + 300 {
+                let x = f64::from_bits(bits);
+                assert_eq!(e.encode(x), linear_to_srgb8(x), "code {k}, x {x:e}");
+            }
+        }
+        // Every byte's own linear value, and random values in and outside [0, 1].
+        for b in 0..=255u8 {
+            assert_eq!(e.encode(srgb_to_linear(b)), b);
+        }
+        let mut rng = 1u64;
+        for _ in 0..200_000 {
+            let x = (xorshift(&mut rng) >> 11) as f64 / (1u64 << 53) as f64 * 1.2 - 0.1;
+            assert_eq!(e.encode(x), linear_to_srgb8(x), "{x:e}");
+        }
+        assert_eq!(e.encode(f64::NAN), linear_to_srgb8(f64::NAN));
+        // Means of four bytes' linear values, as the mip chain takes them.
+        for _ in 0..200_000 {
+            let q: [u8; 4] = xorshift(&mut rng).to_le_bytes()[..4].try_into().unwrap();
+            let sum = q.iter().fold(0.0, |s, &b| s + srgb_to_linear(b));
+            let texels = q.map(|b| [b, b, b, 0]);
+            assert_eq!(e.mean(texels)[0], linear_to_srgb8(sum / 4.0), "{q:?}");
+        }
     }
 
     #[test]

@@ -6,7 +6,17 @@
 //!
 //! ```sh
 //! cargo run --release -p penumbra-tools --bin texture_load -- [TEXTURES] [SIDE] [ROUNDS]
+//! cargo run --release -p penumbra-tools --bin texture_load -- --model FILE [ROUNDS]
 //! ```
+//!
+//! With `--model`, a glTF file of your own (FlightHelmet) is loaded and
+//! uploaded to the default device ROUNDS times (default 3) with all of
+//! rayon's threads: per round the load, the texture layout alone and the
+//! whole upload as the CLI reports it (`Renderer::upload`, which lays the
+//! textures out again and copies them to the device; its BVH build is
+//! reported apart), each in wall time and in the process's CPU time (all
+//! threads, lavapipe's included), which other processes on a shared machine
+//! inflate less. To compare two builds, run each build's binary in turn.
 //!
 //! The file is generated: TEXTURES quads (default 6), each with a
 //! SIDE × SIDE (default 2048) PNG of its own, smooth gradients with noise
@@ -22,6 +32,14 @@ use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::layout::textures::GpuTextures;
 
 fn main() -> anyhow::Result<()> {
+    if std::env::args().nth(1).as_deref() == Some("--model") {
+        let mut args = std::env::args().skip(2);
+        let file = args
+            .next()
+            .ok_or_else(|| anyhow::anyhow!("--model: give a glTF file"))?;
+        let rounds: usize = args.next().map_or(Ok(3), |a| a.parse())?;
+        return model(Path::new(&file), rounds);
+    }
     let mut args = std::env::args().skip(1);
     let count: usize = args.next().map_or(Ok(6), |a| a.parse())?;
     let side: u32 = args.next().map_or(Ok(2048), |a| a.parse())?;
@@ -86,6 +104,90 @@ fn main() -> anyhow::Result<()> {
     let (lm, l0, l1) = median_min_max(&ratios(0));
     let (gm, g0, g1) = median_min_max(&ratios(1));
     println!("speed-up, 1 thread / {all}: load {lm:.2}x [{l0:.2}, {l1:.2}], layout {gm:.2}x [{g0:.2}, {g1:.2}]");
+    Ok(())
+}
+
+/// This process's CPU time (user and system, all threads) in ms.
+fn cpu_ms() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid timespec to write.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) };
+    t.tv_sec as f64 * 1e3 + t.tv_nsec as f64 / 1e6
+}
+
+/// `--model FILE ROUNDS`: the load, the texture layout and the upload of a
+/// glTF file, wall and CPU time per round.
+fn model(file: &Path, rounds: usize) -> anyhow::Result<()> {
+    let mut renderer = penumbra::render::Renderer::new(&Default::default())?;
+    println!("# texture_load --model {}: {rounds} rounds", file.display());
+    println!("CPU: {}", CpuInfo::read().describe());
+    println!(
+        "cores: {}; rayon threads: {}; load average: {}",
+        std::thread::available_parallelism()?,
+        rayon::current_num_threads(),
+        std::fs::read_to_string("/proc/loadavg")?
+            .split(' ')
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    println!(
+        "driver: {} (Mesa {})",
+        renderer.device().name,
+        mesa_version()
+    );
+    println!("round | load wall/cpu ms | texture layout wall/cpu ms | upload wall/cpu ms (BVH wall ms) | textures MiB");
+    let mut rows: Vec<[f64; 6]> = Vec::new();
+    for round in 0..rounds {
+        let (w0, c0) = (Instant::now(), cpu_ms());
+        let loaded = loaders::load_scene(file, &LoadOptions::default())?;
+        let (w1, c1) = (Instant::now(), cpu_ms());
+        let g = GpuTextures::new(&loaded.scene);
+        let (w2, c2) = (Instant::now(), cpu_ms());
+        let bytes = g.texture_bytes;
+        drop(g);
+        let (w3, c3) = (Instant::now(), cpu_ms());
+        let uploaded = renderer.upload(&loaded.scene)?;
+        let (w4, c4) = (Instant::now(), cpu_ms());
+        let (bvh, _) = uploaded.upload_timings();
+        drop(uploaded);
+        let row = [
+            ms(w1 - w0),
+            c1 - c0,
+            ms(w2 - w1),
+            c2 - c1,
+            ms(w4 - w3),
+            c4 - c3,
+        ];
+        println!(
+            "{round} | {:.0} / {:.0} | {:.0} / {:.0} | {:.0} / {:.0} ({:.0}) | {:.1}",
+            row[0],
+            row[1],
+            row[2],
+            row[3],
+            row[4],
+            row[5],
+            ms(bvh),
+            bytes as f64 / 1048576.0
+        );
+        rows.push(row);
+    }
+    let names = [
+        "load wall",
+        "load cpu",
+        "layout wall",
+        "layout cpu",
+        "upload wall",
+        "upload cpu",
+    ];
+    for (i, name) in names.iter().enumerate() {
+        let v: Vec<f64> = rows.iter().map(|r| r[i]).collect();
+        let (m, lo, hi) = median_min_max(&v);
+        println!("{name}: {m:.0} ms [{lo:.0}, {hi:.0}]");
+    }
     Ok(())
 }
 
