@@ -43,6 +43,13 @@ const PRIMS_PER_TEXEL: u32 = 4u;
 // lanes each (docs/stages.md measures it).
 @group(0) @binding(10) var bvh_prims: texture_storage_2d<rgba32uint, read>;
 
+// The same records and references as storage buffers, for the packet
+// traversal (PACKET_TRAVERSAL; placeholders otherwise): it loads them at a
+// subgroup-uniform index, which lavapipe does as one scalar load for the
+// SIMD group, where a texel load is a load per lane.
+@group(0) @binding(29) var<storage, read> bvh_node_words: array<BvhNode>;
+@group(0) @binding(30) var<storage, read> bvh_prim_words: array<u32>;
+
 // Entry `c` (0 to 3) of a texel of references.
 fn texel_entry(four: vec4<u32>, c: u32) -> u32 {
     return select(select(four.x, four.y, c == 1u), select(four.z, four.w, c == 3u), c >= 2u);
@@ -112,6 +119,10 @@ fn box_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>
 // Nearest hit among the BVH's spheres and triangles, nearest child first.
 fn bvh_closest(ray: Ray, hit: ptr<function, Hit>) {
     if globals.num_bvh_nodes == 0u {
+        return;
+    }
+    if PACKET_TRAVERSAL {
+        bvh_closest_packet(ray, hit);
         return;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -205,6 +216,9 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
     if globals.num_bvh_nodes == 0u {
         return false;
     }
+    if PACKET_TRAVERSAL {
+        return bvh_occluded_packet(ray, t_max, start);
+    }
     let inv_dir = safe_inverse(ray.dir);
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
@@ -269,4 +283,171 @@ fn bvh_occluded(ray: Ray, t_max: f32, start: Hit) -> bool {
         }
     }
     return false;
+}
+
+// The packet traversal (PACKET_TRAVERSAL): the active lanes of a subgroup
+// walk the tree together, each testing its own ray against the children of
+// one node, a node visited while any lane's ray enters it (Wald, Slusallek,
+// Benthin and Wagner, "Interactive Rendering with Coherent Ray Tracing",
+// 2001; on a GPU, Garanzha and Loop, "Fast Ray Sorting and Breadth-First
+// Packet Traversal", 2010). Every choice is a vote of the lanes
+// (subgroupAny, subgroupAdd), so the node index is the same in every lane,
+// and the index popped from the stack is broadcast from the first lane
+// (subgroupBroadcastFirst): NIR's divergence analysis then proves the
+// record's address uniform and lavapipe loads it once for the SIMD group
+// and broadcasts it (gallivm's emit_load_mem), where `bvh_record`'s texel
+// loads load it once per lane.
+
+// The lanes' vote on a node's children, `t` their entry distances (as
+// child_entries): one subgroupAdd of four counts, a byte each (a subgroup
+// has at most 128 lanes), since lavapipe reduces over the lanes in a loop
+// for every subgroup operation. x: whether any lane enters the left child,
+// y: the right; z: whether the left goes first, the child more lanes enter
+// first (ties left).
+fn packet_vote(t: vec2<f32>) -> vec3<bool> {
+    let lanes = select(0u, 1u, t.x < BOX_MISS) | select(0u, 0x100u, t.y < BOX_MISS)
+        | select(0u, 0x10000u, t.x < t.y) | select(0u, 0x1000000u, t.y < t.x);
+    let counts = subgroupAdd(lanes);
+    let byte = vec4<u32>(counts, counts >> 8u, counts >> 16u, counts >> 24u) & vec4<u32>(255u);
+    return vec3<bool>(byte.x != 0u, byte.y != 0u, byte.z >= byte.w);
+}
+
+// bvh_closest for the lanes together. The same primitives are tested as by
+// the per-lane walk (and more), so the nearest hit is the same but for
+// exact ties of distance, which go to the primitive tested first.
+fn bvh_closest_packet(ray: Ray, hit: ptr<function, Hit>) {
+    let inv_dir = safe_inverse(ray.dir);
+    // Nodes to visit (the same in every lane) and each lane's entry
+    // distance, the newest in registers as in bvh_closest.
+    var stack: array<u32, BVH_STACK>;
+    var stack_t: array<f32, BVH_STACK>;
+    var sp = 0u;
+    var top = vec4<u32>();
+    var top_t = vec4<f32>();
+    var held = 0u;
+    var node = 0u;
+    var node_t = 0.0;
+    loop {
+        // An interior node is visited without asking whether any lane
+        // still enters it: its children's box tests ask.
+        if (node & BVH_LEAF) == 0u {
+            let record = bvh_node_words[node];
+            let t = child_entries(record, ray.origin, inv_dir, (*hit).t);
+            let vote = packet_vote(t);
+            if vote.x || vote.y {
+                var left_first = vote.x;
+                if vote.x && vote.y {
+                    left_first = vote.z;
+                    if held == STACK_REGISTERS {
+                        stack[sp] = top.w;
+                        stack_t[sp] = top_t.w;
+                        sp++;
+                    } else {
+                        held++;
+                    }
+                    top = vec4<u32>(select(record.left, record.right, left_first), top.xyz);
+                    top_t = vec4<f32>(select(t.x, t.y, left_first), top_t.xyz);
+                }
+                node = select(record.right, record.left, left_first);
+                node_t = select(t.y, t.x, left_first);
+                continue;
+            }
+        } else if subgroupAny(node_t < (*hit).t) {
+            var i = node & ~BVH_LEAF;
+            loop {
+                let prim = bvh_prim_words[i];
+                if (prim & PRIM_SPHERE) != 0u {
+                    closest_sphere(prim & PRIM_INDEX, ray, hit);
+                } else {
+                    closest_triangle(prim & PRIM_INDEX, ray, hit);
+                }
+                if (prim & PRIM_LAST) != 0u {
+                    break;
+                }
+                i++;
+            }
+        }
+        if held > 0u {
+            node = top.x;
+            node_t = top_t.x;
+            top = top.yzwx;
+            top_t = top_t.yzwx;
+            held--;
+        } else if sp > 0u {
+            sp--;
+            node = stack[sp];
+            node_t = stack_t[sp];
+        } else {
+            break;
+        }
+        node = subgroupBroadcastFirst(node);
+    }
+}
+
+// bvh_occluded for the lanes together: a lane whose ray is blocked stops
+// voting, and the walk ends when every lane's is.
+fn bvh_occluded_packet(ray: Ray, t_max: f32, start: Hit) -> bool {
+    let inv_dir = safe_inverse(ray.dir);
+    var stack: array<u32, BVH_STACK>;
+    var sp = 0u;
+    var top = vec4<u32>();
+    var held = 0u;
+    var node = 0u;
+    var blocked = false;
+    loop {
+        if (node & BVH_LEAF) == 0u {
+            let record = bvh_node_words[node];
+            var t = child_entries(record, ray.origin, inv_dir, t_max);
+            if blocked {
+                t = vec2<f32>(BOX_MISS);
+            }
+            let vote = packet_vote(t);
+            if vote.x || vote.y {
+                var left_first = vote.x;
+                if vote.x && vote.y {
+                    left_first = vote.z;
+                    if held == STACK_REGISTERS {
+                        stack[sp] = top.w;
+                        sp++;
+                    } else {
+                        held++;
+                    }
+                    top = vec4<u32>(select(record.left, record.right, left_first), top.xyz);
+                }
+                node = select(record.right, record.left, left_first);
+                continue;
+            }
+        } else {
+            var i = node & ~BVH_LEAF;
+            loop {
+                let prim = bvh_prim_words[i];
+                if !blocked {
+                    if (prim & PRIM_SPHERE) != 0u {
+                        blocked = sphere_blocks(prim & PRIM_INDEX, ray, t_max, start);
+                    } else {
+                        blocked = triangle_blocks(prim & PRIM_INDEX, ray, t_max, start);
+                    }
+                }
+                if (prim & PRIM_LAST) != 0u {
+                    break;
+                }
+                i++;
+            }
+            if subgroupAll(blocked) {
+                return true;
+            }
+        }
+        if held > 0u {
+            node = top.x;
+            top = top.yzwx;
+            held--;
+        } else if sp > 0u {
+            sp--;
+            node = stack[sp];
+        } else {
+            break;
+        }
+        node = subgroupBroadcastFirst(node);
+    }
+    return blocked;
 }

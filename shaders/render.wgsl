@@ -32,6 +32,9 @@ override HAS_ALPHA_TESTS: bool = true;
 override HAS_SINGLE_SIDED: bool = true;
 // Kernel variants chosen by the user (render::KernelOptions).
 override USE_BVH: bool = true;
+// The lanes of a subgroup walk the BVH together (render::Traversal::Packet;
+// bvh.wgsl, bvh_closest_packet), else each its own ray's path.
+override PACKET_TRAVERSAL: bool = false;
 override TRIANGLE_TEST: u32 = 0u;
 // 0: robust shadow-ray start (shadows.wgsl); > 0: fixed offset along the normal.
 override SHADOW_EPSILON: f32 = 0.0;

@@ -371,6 +371,8 @@ impl Assembled {
         }
         let bvh = kernel.accel == Accel::Bvh;
         constants.insert("USE_BVH".into(), if bvh { 1.0 } else { 0.0 });
+        let packet = kernel.traversal == Traversal::Packet;
+        constants.insert("PACKET_TRAVERSAL".into(), if packet { 1.0 } else { 0.0 });
         constants.insert("TRIANGLE_TEST".into(), kernel.triangle_test as u32 as f64);
         let epsilon = match kernel.shadow_offset {
             ShadowOffset::Robust => 0.0,
@@ -451,7 +453,9 @@ pub fn validator() -> naga::valid::Validator {
         .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
         .subgroup_operations(
             naga::valid::SubgroupOperationSet::BASIC
-                | naga::valid::SubgroupOperationSet::ARITHMETIC,
+                | naga::valid::SubgroupOperationSet::ARITHMETIC
+                | naga::valid::SubgroupOperationSet::VOTE
+                | naga::valid::SubgroupOperationSet::BALLOT,
         );
     validator
 }
@@ -464,6 +468,22 @@ pub enum Accel {
     Bvh,
     /// Test every primitive (the baseline the BVH is measured against).
     BruteForce,
+}
+
+/// How the lanes of a subgroup walk the BVH (primary rays in the hit
+/// stage, shadow rays in the hit and shadow stages, ray queries).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Traversal {
+    /// Each lane walks the tree for its own ray, loading its records as
+    /// texels (the default).
+    #[default]
+    PerLane,
+    /// The lanes walk it together: the node is the same for every lane
+    /// (`subgroupBroadcastFirst`), its record a storage-buffer load at a
+    /// subgroup-uniform index, each lane testing its own ray against the
+    /// node's children (`shaders/bvh.wgsl`, `PACKET_TRAVERSAL`;
+    /// docs/stages.md measures it).
+    Packet,
 }
 
 /// The ray/triangle test.
@@ -511,6 +531,8 @@ impl std::hash::Hash for ShadowOffset {
 pub struct KernelOptions {
     /// BVH or brute force.
     pub accel: Accel,
+    /// Per-lane or packet BVH traversal.
+    pub traversal: Traversal,
     /// Order of the ray/triangle test.
     pub triangle_test: TriangleTest,
     /// Where shadow rays start.
@@ -535,6 +557,7 @@ impl Default for KernelOptions {
     fn default() -> Self {
         KernelOptions {
             accel: Accel::default(),
+            traversal: Traversal::default(),
             triangle_test: TriangleTest::default(),
             shadow_offset: ShadowOffset::default(),
             sampler: Sampler::default(),
@@ -552,6 +575,17 @@ impl std::str::FromStr for Accel {
             "bvh" => Ok(Accel::Bvh),
             "brute-force" => Ok(Accel::BruteForce),
             _ => Err(format!("expected `bvh` or `brute-force`, got `{s}`")),
+        }
+    }
+}
+
+impl std::str::FromStr for Traversal {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "per-lane" => Ok(Traversal::PerLane),
+            "packet" => Ok(Traversal::Packet),
+            _ => Err(format!("expected `per-lane` or `packet`, got `{s}`")),
         }
     }
 }
@@ -634,7 +668,13 @@ pub fn setting_values(s: &Settings) -> [(&'static str, bool); 5] {
 
 /// The WGSL `override`s of the kernel options (besides the features' and
 /// settings'), as in `shaders/render.wgsl`.
-pub const OPTION_OVERRIDES: [&str; 4] = ["USE_BVH", "TRIANGLE_TEST", "SHADOW_EPSILON", "SAMPLER"];
+pub const OPTION_OVERRIDES: [&str; 5] = [
+    "USE_BVH",
+    "PACKET_TRAVERSAL",
+    "TRIANGLE_TEST",
+    "SHADOW_EPSILON",
+    "SAMPLER",
+];
 
 /// The shade stage's WGSL `override` for each feature it depends on, as in
 /// `shaders/shading/interface.wgsl` and `shaders/stages/shade.wgsl` (the

@@ -171,9 +171,11 @@ impl Renderer {
         StageKernel {
             features: scene.features,
             settings: self.with_device(settings),
-            // The BVH buffers are empty for a scene uploaded for brute force.
+            // The BVH buffers are empty for a scene uploaded for brute force,
+            // its words for one uploaded for the per-lane traversal.
             options: KernelOptions {
                 accel: scene.kernel.accel,
+                traversal: scene.kernel.traversal,
                 ..self.kernel
             },
         }

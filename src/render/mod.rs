@@ -42,7 +42,7 @@ use crate::scene::{Features, Scene};
 use crate::vulkan::{Context, ContextOptions, DeviceInfo};
 pub use compile::{
     Accel, CompileError, KernelOptions, Settings, ShaderSource, ShadowOffset, StageKernel,
-    TriangleTest,
+    Traversal, TriangleTest,
 };
 pub use error::{is_timeout, RenderError};
 pub use reload::ReloadReport;
@@ -309,7 +309,8 @@ impl Renderer {
     }
 
     /// Switches the kernel variant (BVH or brute force, triangle test); the
-    /// pipeline cache keeps every variant compiled so far.
+    /// pipeline cache keeps every variant compiled so far. The acceleration
+    /// structure and the traversal are those a scene was uploaded with.
     pub fn set_kernel(&mut self, kernel: KernelOptions) {
         self.kernel = kernel;
     }

@@ -262,6 +262,13 @@ pub enum Binding {
     /// The first lights again, as a uniform buffer (`shaders/lights.wgsl`:
     /// `light_at`).
     LightBlock,
+    /// The BVH records again, as a storage buffer, for the packet traversal
+    /// (`KernelOptions::traversal`; a placeholder otherwise): loaded at a
+    /// subgroup-uniform index, once for the subgroup.
+    BvhNodeWords,
+    /// The BVH primitive references again, as a storage buffer, for the
+    /// packet traversal.
+    BvhPrimWords,
 }
 
 /// One binding: its WGSL variable and descriptor type.
@@ -280,7 +287,7 @@ const fn b(binding: Binding, name: &'static str, ty: BindingType) -> BindingInfo
 }
 
 /// Set 0, in binding order.
-pub const BINDINGS: [BindingInfo; 29] = {
+pub const BINDINGS: [BindingInfo; 31] = {
     use BindingType::*;
     [
         b(Binding::Globals, "globals", Uniform),
@@ -320,6 +327,8 @@ pub const BINDINGS: [BindingInfo; 29] = {
         b(Binding::ResolvedWords, "resolved_words", StorageReadWrite),
         b(Binding::ImageWords, "image_words", StorageReadWrite),
         b(Binding::LightBlock, "light_block", Uniform),
+        b(Binding::BvhNodeWords, "bvh_node_words", StorageReadOnly),
+        b(Binding::BvhPrimWords, "bvh_prim_words", StorageReadOnly),
     ]
 };
 

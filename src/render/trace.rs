@@ -93,6 +93,7 @@ impl Renderer {
             settings: super::Settings::default(),
             options: super::KernelOptions {
                 accel: scene.kernel.accel,
+                traversal: scene.kernel.traversal,
                 ..self.kernel
             },
         };

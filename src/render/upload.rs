@@ -10,7 +10,7 @@ use super::bindings::{BindingSet, Bindings, Bound};
 use super::layout::{self, GpuScene};
 use super::shade::Materials;
 use super::stages::Binding;
-use super::{bands, Accel, KernelOptions, RenderError, Renderer, MAX_OBJECTS, TILE};
+use super::{bands, Accel, KernelOptions, RenderError, Renderer, Traversal, MAX_OBJECTS, TILE};
 use crate::scene::{Features, Scene};
 use crate::vulkan::BufferUsage;
 
@@ -308,6 +308,20 @@ impl Renderer {
             Binding::BvhPrims,
             texels("BVH primitives", bytemuck::cast_slice(&gpu.bvh_prims))?,
         );
+        // The same again as storage buffers for the packet traversal.
+        let packet = self.kernel.traversal == Traversal::Packet && !gpu.bvh_nodes.is_empty();
+        let (node_words, prim_words) = match packet {
+            true => (
+                storage("BVH node words", bytemuck::cast_slice(&gpu.bvh_nodes))?,
+                storage("BVH primitive words", bytemuck::cast_slice(&gpu.bvh_prims))?,
+            ),
+            false => (
+                placeholder("BVH node words")?,
+                placeholder("BVH primitive words")?,
+            ),
+        };
+        set.put(Binding::BvhNodeWords, node_words);
+        set.put(Binding::BvhPrimWords, prim_words);
         // Shaders, their parameters, textures and surface attributes.
         set.put(
             Binding::ShaderNodes,
@@ -363,7 +377,16 @@ impl Renderer {
             Bound::Image(image) if !gpu.bvh_nodes.is_empty() => image.size() as usize,
             _ => 0,
         };
-        let bvh_bytes = image_bytes(Binding::BvhNodes) + image_bytes(Binding::BvhPrims);
+        // (and the packet traversal's copies as words).
+        let word_bytes = match packet {
+            true => {
+                std::mem::size_of_val(&gpu.bvh_nodes[..])
+                    + std::mem::size_of_val(&gpu.bvh_prims[..])
+            }
+            false => 0,
+        };
+        let bvh_bytes =
+            image_bytes(Binding::BvhNodes) + image_bytes(Binding::BvhPrims) + word_bytes;
         // First triangle of each triangle-based object, to number AOV
         // primitives within their object.
         let mut next = 0u32;

@@ -213,10 +213,14 @@ impl InstanceHolder {
             props2 = props2.push_next(&mut driver);
         }
         unsafe { instance.get_physical_device_properties2(handle, &mut props2) };
-        // The kernel sums its ray counters per subgroup (subgroupAdd):
-        // lavapipe and every desktop GPU have this; a device without it is
-        // not usable.
-        let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC;
+        // The kernel sums its ray counters per subgroup (subgroupAdd), and
+        // the packet traversal votes and broadcasts (subgroupAny,
+        // subgroupBroadcastFirst): lavapipe and every desktop GPU have
+        // these; a device without them is not usable.
+        let ops = vk::SubgroupFeatureFlags::BASIC
+            | vk::SubgroupFeatureFlags::ARITHMETIC
+            | vk::SubgroupFeatureFlags::VOTE
+            | vk::SubgroupFeatureFlags::BALLOT;
         if !subgroup
             .supported_stages
             .contains(vk::ShaderStageFlags::COMPUTE)

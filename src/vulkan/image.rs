@@ -184,6 +184,10 @@ impl Context {
         }
         let device = &self.shared.device;
         let format = vk::Format::R32G32B32A32_UINT;
+        // On a CPU device whose linear texel images are whole rows from offset 0 (the probe
+        // of `stage_words`), contents are written straight into the image's memory: no
+        // staging buffer, and no copy by the driver (docs/textures.md, FlightHelmet's load).
+        let host_written = data.is_some() && self.stage_words;
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
@@ -195,13 +199,18 @@ impl Context {
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(match words {
+            .tiling(match words || host_written {
                 true => vk::ImageTiling::LINEAR,
                 false => vk::ImageTiling::OPTIMAL,
             })
             .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+            // Host writes to a linear image survive only a transition from PREINITIALIZED
+            // (Vulkan 1.3, "Image Layouts").
+            .initial_layout(match host_written {
+                true => vk::ImageLayout::PREINITIALIZED,
+                false => vk::ImageLayout::UNDEFINED,
+            });
         // SAFETY: valid create info; the TexelImage below owns (and on error destroys) it.
         let image = unsafe { device.create_image(&info, None) }.map_err(vk_err("vkCreateImage"))?;
         let mut result = TexelImage {
@@ -239,15 +248,16 @@ impl Context {
                 requirements.size
             )));
         }
-        let preferences = [
-            vk::MemoryPropertyFlags::DEVICE_LOCAL,
-            vk::MemoryPropertyFlags::empty(),
-        ];
-        (result.memory, _) = self.allocate_memory(
-            &format!("texel image '{label}'"),
-            requirements,
-            &preferences,
-        )?;
+        let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let preferences: &[vk::MemoryPropertyFlags] = match host_written {
+            true => &[vk::MemoryPropertyFlags::DEVICE_LOCAL | host, host],
+            false => &[
+                vk::MemoryPropertyFlags::DEVICE_LOCAL,
+                vk::MemoryPropertyFlags::empty(),
+            ],
+        };
+        (result.memory, _) =
+            self.allocate_memory(&format!("texel image '{label}'"), requirements, preferences)?;
         unsafe { device.bind_image_memory(image, result.memory, 0) }
             .map_err(vk_err("vkBindImageMemory"))?;
         if let Some(buffer) = &result.words {
@@ -292,9 +302,85 @@ impl Context {
             })?;
             return Ok(result);
         };
-        // Images in optimal tiling cannot be mapped: upload through a staging buffer.
-        self.upload_rows(image, range, label, height, data)?;
+        if host_written {
+            self.write_rows(&result, range, height, data)?;
+        } else {
+            // Images in optimal tiling cannot be mapped: upload through a staging buffer.
+            self.upload_rows(image, range, label, height, data)?;
+        }
         Ok(result)
+    }
+
+    /// Fills `image` (a linear texel image in host-visible, coherent memory, still in the
+    /// `PREINITIALIZED` layout) with `data` (the rest zero) through a mapping, on all cores,
+    /// and leaves it in `GENERAL` for the shaders.
+    fn write_rows(
+        &self,
+        image: &TexelImage,
+        range: vk::ImageSubresourceRange,
+        height: u32,
+        data: &[u8],
+    ) -> Result<(), VulkanError> {
+        use rayon::prelude::*;
+        let device = &self.shared.device;
+        // SAFETY: a valid image; its layout is asked of its only subresource.
+        let layout = unsafe {
+            device.get_image_subresource_layout(
+                image.image,
+                vk::ImageSubresource::default().aspect_mask(vk::ImageAspectFlags::COLOR),
+            )
+        };
+        let row = TEXEL_ROW as u64 * TEXEL_BYTES as u64;
+        let rows = u64::from(height);
+        if layout.offset != 0 || layout.row_pitch != row || layout.size < rows * row {
+            return Err(VulkanError::Limit(format!(
+                "texel image '{}': its linear layout is not whole rows of {TEXEL_ROW} texels from offset 0",
+                image.label
+            )));
+        }
+        let len = (rows * row) as usize;
+        // SAFETY: the memory is host-visible, bound to this image alone, and idle.
+        let ptr =
+            unsafe { device.map_memory(image.memory, 0, len as u64, vk::MemoryMapFlags::empty()) }
+                .map_err(vk_err("vkMapMemory"))?;
+        // SAFETY: the mapping covers `len` bytes and nothing else accesses them until unmapped.
+        let mapped = unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), len) };
+        // Chunks of 1 MiB: both cores fault in and fill the pages, the copy's cost on a CPU.
+        const CHUNK: usize = 1 << 20;
+        mapped
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(i, out)| {
+                let start = (i * CHUNK).min(data.len());
+                let end = (start + out.len()).min(data.len());
+                let (copied, zeroed) = out.split_at_mut(end - start);
+                copied.copy_from_slice(&data[start..end]);
+                zeroed.fill(0);
+            });
+        // SAFETY: mapped above; coherent memory needs no flush.
+        unsafe { device.unmap_memory(image.memory) };
+        let to_shader = vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::PREINITIALIZED)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_access_mask(vk::AccessFlags::HOST_WRITE)
+            .dst_access_mask(vk::AccessFlags::SHADER_READ)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.image)
+            .subresource_range(range);
+        // SAFETY: the image is valid and idle.
+        self.submit(|device, cmd| unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::HOST,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_shader],
+            );
+        })?;
+        Ok(())
     }
 
     /// Fills `image` (`height` rows of [`TEXEL_ROW`] texels, still in the

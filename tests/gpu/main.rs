@@ -33,6 +33,7 @@ mod lights;
 mod metallic_roughness;
 mod occlusion;
 mod output;
+mod packet;
 mod precision;
 mod preview;
 mod reference;

@@ -1,7 +1,9 @@
 //! A/B timing of two shader trees on one scene: is my edit faster?
 //!
 //! `cargo run --release -p penumbra-tools --bin ab -- SCENE --b my_shaders/` renders the
-//! scene with the built-in shaders (A, or `--a DIR`) and with `DIR` (B),
+//! scene with the built-in shaders (A, or `--a DIR`) and with `DIR` (B, or
+//! the built-in ones too without `--b`, to compare settings such as
+//! `--b-traversal packet`),
 //! interleaved A B A B … after a warm-up frame of each, and prints both
 //! medians and the median of the per-pair ratios B/A with its range. Pairs,
 //! not two separate runs, because a 2-core machine's second core comes and
@@ -18,7 +20,7 @@ use common::load::worker_cpu_ns;
 use common::ms;
 use common::stats::median_min_max;
 use penumbra::loaders::{self, LoadOptions};
-use penumbra::render::{Renderer, RendererOptions, ShaderSource};
+use penumbra::render::{KernelOptions, Renderer, RendererOptions, ShaderSource, Traversal};
 
 #[derive(Parser)]
 #[command(name = "ab", about = "Interleaved A/B frame times of two shader trees")]
@@ -28,9 +30,20 @@ struct Args {
     /// Shader tree A (default: the shaders built into the binary).
     #[arg(long)]
     a: Option<PathBuf>,
-    /// Shader tree B.
+    /// Shader tree B (default: the shaders built into the binary).
     #[arg(long)]
-    b: PathBuf,
+    b: Option<PathBuf>,
+    /// Subdivide the scene's first mesh this many times first, each
+    /// triangle into four (3 makes the bunny's 3,676 triangles the
+    /// benchmark's 235k-triangle bunny: common::meshes::subdivided_bunny).
+    #[arg(long, default_value_t = 0)]
+    subdivide: u32,
+    /// Side A's BVH traversal: `per-lane` or `packet` (`KernelOptions::traversal`).
+    #[arg(long, default_value = "per-lane")]
+    a_traversal: Traversal,
+    /// Side B's BVH traversal.
+    #[arg(long, default_value = "per-lane")]
+    b_traversal: Traversal,
     /// Measured pairs.
     #[arg(long, default_value_t = 7)]
     pairs: usize,
@@ -69,22 +82,29 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     anyhow::ensure!(args.pairs > 0, "--pairs: must be at least 1");
     let device = args.device.selector()?;
-    let scene = loaders::load_scene(&args.scene, &LoadOptions::default())?.scene;
+    let mut scene = loaders::load_scene(&args.scene, &LoadOptions::default())?.scene;
+    if args.subdivide > 0 {
+        scene = common::meshes::subdivided_bunny(&scene, args.subdivide);
+    }
     let source = |d: &Option<PathBuf>| match d {
         Some(p) => ShaderSource::Directory(p.clone()),
         None => ShaderSource::Embedded,
     };
     let mut sides = Vec::new();
-    let a = (args.a_unfused, args.a_texel_stores);
-    let b = (args.b_unfused, args.b_texel_stores);
+    let a = (args.a_unfused, args.a_texel_stores, args.a_traversal);
+    let b = (args.b_unfused, args.b_texel_stores, args.b_traversal);
     let sides_in = [
         ("A", source(&args.a), args.a_stage_kib, a),
-        ("B", source(&Some(args.b.clone())), args.b_stage_kib, b),
+        ("B", source(&args.b), args.b_stage_kib, b),
     ];
-    for (name, dir, stage_kib, (unfused, texel_stores)) in sides_in {
+    for (name, dir, stage_kib, (unfused, texel_stores, traversal)) in sides_in {
         let mut r = Renderer::new(&RendererOptions {
             device: device.clone(),
             shaders: dir,
+            kernel: KernelOptions {
+                traversal,
+                ..Default::default()
+            },
             ..Default::default()
         })?;
         if let Some(kib) = stage_kib {

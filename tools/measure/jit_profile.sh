@@ -10,6 +10,9 @@
 #     shape gallivm gives a load or store at a per-lane address when it emits it as a loop;
 #   - `and $0x7` lane masks: a vector lane chosen by a loop counter, which LLVM lowers to
 #     storing the whole vector to the stack, writing one lane and reloading it;
+#   - the kernel's calls through a pointer (lavapipe's image functions: a texel load or store
+#     each), its gathers (vpgather*) and its broadcasts (vpbroadcast*: among them a
+#     storage-buffer load at a subgroup-uniform address, loaded once and broadcast);
 #   - the share of samples in the kernel and inside the per-lane loops, by the storage-buffer
 #     slot of the lavapipe context they read;
 #   - per mapping of generated code (a stage's kernel, sometimes several in one mapping;
@@ -22,12 +25,15 @@
 #     zero for AVX2 code, so a run under GALLIUM_OVERRIDE_CPU_CAPS=avx on an AVX-512 CPU shows
 #     whether the cap holds (the environment passes through to the render).
 #
-#   tools/measure/jit_profile.sh [installed|OLD]     OLD: the tree of tools/mesa_tree.sh
+#   tools/measure/jit_profile.sh [installed|OLD] [RENDER ARGS...]
+#
+# OLD: the tree of tools/mesa_tree.sh; RENDER ARGS go to both renders (e.g. `--traversal packet`).
 #
 # Needs perf (linux-perf), gdb and objdump (binutils); run it on an otherwise quiet machine.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 driver=${1:-installed}
+extra=("${@:2}")
 for t in perf gdb objdump python3; do
   command -v "$t" >/dev/null || { echo "jit_profile.sh: needs $t" >&2; exit 1; }
 done
@@ -45,8 +51,8 @@ trap 'kill "$pid" 2>/dev/null || true; [ -n "${JIT_PROFILE_KEEP:-}" ] || rm -rf 
 # is killed once sampled and dumped).
 # Both at 256 bits, lavapipe's default, which auto would raise to 512 for 64 passes on a CPU
 # with AVX-512; an LP_NATIVE_VECTOR_WIDTH in the environment still wins.
-env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 2 -o "$work/o.png" >/dev/null
-env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 1024 -o "$work/o.png" >"$work/render.log" &
+env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 2 "${extra[@]}" -o "$work/o.png" >/dev/null
+env "${env[@]}" "$bin" render scenes/bunny_scene.glb --vector-width 256 --spp 1024 "${extra[@]}" -o "$work/o.png" >"$work/render.log" &
 pid=$!
 sleep 4
 perf record -q -e cpu-clock -p "$pid" -o "$work/perf.data" -- sleep 4 >/dev/null 2>&1
@@ -99,6 +105,8 @@ for i, (a, t) in enumerate(rows[:-1]):
 print(f"kernel code: {end - start} bytes, {len(rows)} instructions")
 print(f"stack: frame up to {max(slots, default=0)} bytes, {len(slots)} distinct slots")
 print(f"per-lane loops: {len(loops)}; loop-indexed lanes (and $0x7): {text.count('and    $0x7,')}")
+print(f"calls through a pointer (texel loads and stores): {len(re.findall(r'call +[*]', text))}; "
+      f"gathers (vpgather*): {text.count('vpgather')}; broadcasts (vpbroadcast*): {text.count('vpbroadcast')}")
 print(f"samples: {total}, in the kernel: {100 * in_jit / max(total, 1):.1f}%")
 by_slot = collections.Counter()
 for lo, hi in loops:

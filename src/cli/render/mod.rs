@@ -14,7 +14,7 @@ use penumbra::loaders::{self, Loaded};
 use penumbra::output;
 use penumbra::render::{
     Accel, KernelOptions, RenderError, Renderer, RendererOptions, Sampler, Sampling, ShaderSource,
-    TriangleTest,
+    Traversal, TriangleTest,
 };
 use penumbra::terminal;
 use penumbra::vector_width;
@@ -59,6 +59,11 @@ pub struct RenderArgs {
     /// How rays find spheres and triangles: `bvh` or `brute-force`.
     #[arg(long, default_value = "bvh")]
     accel: Accel,
+    /// How a SIMD group's lanes walk the BVH: `per-lane` (each its own
+    /// ray's path) or `packet` (together, one node at a time; docs/stages.md
+    /// measures it).
+    #[arg(long, default_value = "per-lane")]
+    traversal: Traversal,
     /// Ray/triangle test: `watertight` (Woop et al., u,v before t), or
     /// Möller–Trumbore `uv-first` (the seminar's) or `t-first`.
     #[arg(long, default_value = "watertight")]
@@ -143,6 +148,7 @@ impl RenderArgs {
     fn kernel(&self) -> KernelOptions {
         KernelOptions {
             accel: self.accel,
+            traversal: self.traversal,
             triangle_test: self.triangle_test,
             sampler: self.sampler,
             ..Default::default()

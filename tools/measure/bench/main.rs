@@ -160,6 +160,7 @@ fn main() -> anyhow::Result<()> {
         );
     }
     results.specialise = child(&args, p, "specialise", &[])?;
+    results.packet = Some(child(&args, p, "packet", &[])?);
     results.textures = Some(child(&args, p, "textures", &[])?);
     results.scaling = child(&args, p, "scaling", &[])?;
     if !args.no_knobs {
@@ -261,6 +262,7 @@ fn run_child(args: &Args, part: &str, out: &Path) -> anyhow::Result<()> {
         "seminar" => serde_json::to_string(&parts::seminar::run(args)?)?,
         "scaling" => serde_json::to_string(&parts::scaling::run(args)?)?,
         "specialise" => serde_json::to_string(&parts::specialise::run(args)?)?,
+        "packet" => serde_json::to_string(&parts::packet::run(args)?)?,
         "textures" => serde_json::to_string(&parts::textures::run(args)?)?,
         "cpu" => serde_json::to_string(&parts::cpu::run(args)?)?,
         "cli" => serde_json::to_string(&parts::cli::run(args)?)?,

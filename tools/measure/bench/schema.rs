@@ -70,6 +70,14 @@ pub struct Pair {
     pub ratio: Stat,
 }
 
+/// Section 4b: the packet traversal (`Traversal::Packet`) against the
+/// default per-lane one, interleaved.
+#[derive(Serialize, Deserialize, Clone, Debug, Default)]
+pub struct PacketPart {
+    /// A = packet, B = per-lane, on the bunny.
+    pub bunny: Pair,
+}
+
 /// Section 2: the seminar's triangle-test claim and the BVH, as interleaved pairs.
 #[derive(Serialize, Deserialize, Clone, Debug, Default)]
 pub struct SeminarPart {
@@ -294,6 +302,10 @@ pub struct Results {
     /// measured it, and with `--no-knobs` (on a GPU it does not apply).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drivers: Option<DriversPart>,
+    /// The packet traversal against the per-lane one; absent from reports
+    /// written before the benchmark measured it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub packet: Option<PacketPart>,
     /// The one-shot CLI render, timed end to end; absent from reports
     /// written before the benchmark timed it.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -7,6 +7,7 @@ pub mod cli;
 pub mod cpu;
 pub mod drivers;
 pub mod knobs;
+pub mod packet;
 pub mod peers;
 pub mod profile;
 pub mod scaling;

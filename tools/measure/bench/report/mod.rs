@@ -9,6 +9,7 @@ pub mod fmt;
 pub mod header;
 pub mod knobs;
 pub mod load;
+pub mod packet;
 pub mod peers;
 pub mod scaling;
 pub mod seminar;
@@ -29,6 +30,7 @@ const SECTIONS: &[fn(&mut String, &Results)] = &[
     seminar::section,
     scaling::section,
     specialise::section,
+    packet::section,
     textures::section,
     knobs::section,
     knobs::drivers_section,
