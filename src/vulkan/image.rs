@@ -280,26 +280,16 @@ impl Context {
         let range_all = range;
         let Some(data) = data else {
             // No contents: only the layout the shaders use.
-            let to_shader = vk::ImageMemoryBarrier::default()
-                .old_layout(vk::ImageLayout::UNDEFINED)
-                .new_layout(vk::ImageLayout::GENERAL)
-                .dst_access_mask(vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(image)
-                .subresource_range(range_all);
-            // SAFETY: the image is valid and idle.
-            self.submit(|device, cmd| unsafe {
-                device.cmd_pipeline_barrier(
-                    cmd,
+            self.to_general(
+                image,
+                range_all,
+                (
+                    vk::ImageLayout::UNDEFINED,
                     vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_shader],
-                );
-            })?;
+                ),
+                vk::AccessFlags::empty(),
+                vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+            )?;
             return Ok(result);
         };
         if host_written {
@@ -359,25 +349,47 @@ impl Context {
             });
         // SAFETY: mapped above; coherent memory needs no flush.
         unsafe { device.unmap_memory(image.memory) };
-        let to_shader = vk::ImageMemoryBarrier::default()
-            .old_layout(vk::ImageLayout::PREINITIALIZED)
+        self.to_general(
+            image.image,
+            range,
+            (
+                vk::ImageLayout::PREINITIALIZED,
+                vk::PipelineStageFlags::HOST,
+            ),
+            vk::AccessFlags::HOST_WRITE,
+            vk::AccessFlags::SHADER_READ,
+        )
+    }
+
+    /// Moves an idle `image` from layout `from.0` (last written by stage `from.1` with
+    /// `src_access`) to `GENERAL` for the compute shaders' `dst_access`, and waits.
+    fn to_general(
+        &self,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        from: (vk::ImageLayout, vk::PipelineStageFlags),
+        src_access: vk::AccessFlags,
+        dst_access: vk::AccessFlags,
+    ) -> Result<(), VulkanError> {
+        let barrier = vk::ImageMemoryBarrier::default()
+            .old_layout(from.0)
             .new_layout(vk::ImageLayout::GENERAL)
-            .src_access_mask(vk::AccessFlags::HOST_WRITE)
-            .dst_access_mask(vk::AccessFlags::SHADER_READ)
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access)
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image.image)
+            .image(image)
             .subresource_range(range);
         // SAFETY: the image is valid and idle.
         self.submit(|device, cmd| unsafe {
             device.cmd_pipeline_barrier(
                 cmd,
-                vk::PipelineStageFlags::HOST,
+                from.1,
                 vk::PipelineStageFlags::COMPUTE_SHADER,
                 vk::DependencyFlags::empty(),
                 &[],
                 &[],
-                &[to_shader],
+                &[barrier],
             );
         })?;
         Ok(())
