@@ -6,21 +6,10 @@
 //! light, a point light, and spheres and planes beside the BVH, traced in
 //! the hit stage (fused) and in the shadow stage.
 
-use crate::support;
+use crate::support::{self, repo_scene as scene};
 
 use penumbra::render::{Frame, KernelOptions, Sampling, Traversal};
 use penumbra::scene::Scene;
-
-/// A scene of `scenes/` at `width`×`height`.
-fn scene(file: &str, width: u32, height: u32) -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(file);
-    let mut scene = support::load(&path);
-    scene.camera.width = width;
-    scene.camera.height = height;
-    scene
-}
 
 fn render(scene: &Scene, traversal: Traversal) -> Frame {
     let kernel = KernelOptions {

@@ -10,7 +10,7 @@
 //! by its subgroup and lane (`render::Settings::lane_pixels`); that image
 //! must equal the one placed by the invocation's index, bit for bit.
 
-use crate::support;
+use crate::support::{self, repo_scene as scene};
 
 use penumbra::render::{Frame, Renderer};
 use penumbra::scene::Scene;
@@ -62,18 +62,6 @@ fn differing_pixels(a: &Frame, b: &Frame) -> usize {
     let (a, b) = (&a.image.pixels, &b.image.pixels);
     assert_eq!(a.len(), b.len());
     a.iter().zip(b).filter(|(x, y)| bits(x) != bits(y)).count()
-}
-
-/// A scene of `scenes/` at `width`×`height`.
-fn scene(file: &str, width: u32, height: u32) -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(file);
-    let mut scene = support::load(&path);
-    scene.camera.width = width;
-    scene.camera.height = height;
-    scene.validate().expect("valid");
-    scene
 }
 
 #[test]

@@ -69,6 +69,19 @@ pub fn load(path: &Path) -> Scene {
         .scene
 }
 
+/// The scene file `file` of the repository's `scenes/` at `width`×`height`,
+/// validated.
+pub fn repo_scene(file: &str, width: u32, height: u32) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(file);
+    let mut scene = load(&path);
+    scene.camera.width = width;
+    scene.camera.height = height;
+    scene.validate().expect("valid");
+    scene
+}
+
 /// Asserts two colours agree within `tol` per channel.
 #[track_caller]
 pub fn assert_rgb(got: [f32; 4], want: [f64; 3], tol: f64) {
