@@ -10,6 +10,7 @@ use anyhow::Context as _;
 use penumbra::render::{KernelOptions, ShaderSource};
 use penumbra::vector_width;
 use penumbra::vulkan::DeviceSelector;
+use penumbra::watch::preview;
 
 use super::look::{DisplayArgs, LightingArgs};
 use super::{exit_leaving_the_device, renderer_options, side_parser, LimitArgs, Seconds};
@@ -61,12 +62,26 @@ pub struct WatchArgs {
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true,
           default_value_t = Seconds(penumbra::watch::DEFAULT_TIME_LIMIT))]
     time_limit: Seconds,
+    /// Render the preview in a second process whose driver compiles quickly
+    /// (lavapipe without LLVM's optimisation passes, at 128 bits): `auto` on a
+    /// CPU device, where the compile is most of an edit's wait; `on` on any
+    /// device; `off`: this process renders the preview.
+    #[arg(long, value_enum, default_value_t = PreviewProcess::Auto)]
+    preview_process: PreviewProcess,
     #[command(flatten)]
     limits: LimitArgs,
     #[command(flatten)]
     lighting: LightingArgs,
     #[command(flatten)]
     display: DisplayArgs,
+}
+
+/// `--preview-process`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum PreviewProcess {
+    Auto,
+    On,
+    Off,
 }
 
 pub fn run(args: WatchArgs) -> anyhow::Result<()> {
@@ -110,6 +125,17 @@ pub fn run(args: WatchArgs) -> anyhow::Result<()> {
     opts.preview_divisor = args.preview;
     opts.debounce = Duration::from_millis(args.debounce_ms);
     opts.resume = penumbra::watch::restart::Resume::take_from_env();
+    if preview::is_worker() {
+        // The loop's preview process (src/watch/preview.rs): the same
+        // options, no loop, no page; it ends when the loop closes its input.
+        return preview::serve(&opts);
+    }
+    if args.preview_process != PreviewProcess::Off {
+        opts.preview_process = Some(
+            preview::WorkerCommand::this_process(args.preview_process == PreviewProcess::On)
+                .context("finding this program for the preview process")?,
+        );
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();

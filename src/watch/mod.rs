@@ -23,6 +23,7 @@
 //! always completes.
 
 pub mod files;
+pub mod preview;
 pub mod restart;
 pub mod server;
 pub mod stage;
@@ -33,7 +34,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::loaders::LoadOptions;
@@ -75,6 +76,9 @@ pub struct WatchOptions {
     /// reload numbers go on, the page's address, the files not to render
     /// again until they change.
     pub resume: restart::Resume,
+    /// Render the preview in a second process whose driver compiles quickly
+    /// ([`preview`]); None: the loop renders it.
+    pub preview_process: Option<preview::WorkerCommand>,
 }
 
 impl WatchOptions {
@@ -94,6 +98,7 @@ impl WatchOptions {
             preview_divisor: 4,
             debounce: Duration::from_millis(30),
             resume: restart::Resume::default(),
+            preview_process: None,
         }
     }
 }
@@ -120,6 +125,10 @@ pub struct StageReport {
     pub latency: Duration,
     /// When the image was on disk.
     pub written_at: Instant,
+    /// A preview (smaller than the full image).
+    pub preview: bool,
+    /// Rendered by the preview process ([`preview`]).
+    pub worker: bool,
 }
 
 /// What one reload did.
@@ -244,8 +253,17 @@ struct Watch {
     shader_dir: Option<PathBuf>,
     /// The engine's shader files in `shader_dir`, normalised.
     shader_files: Vec<PathBuf>,
-    /// Where stages go.
-    out: Output,
+    /// Where stages go (the preview process's reader thread writes too).
+    out: Arc<Mutex<Output>>,
+    /// The preview process, while one runs.
+    worker: Option<preview::Worker>,
+    /// How to start one (None: the loop renders its previews).
+    worker_command: Option<preview::WorkerCommand>,
+    /// How many were started.
+    worker_starts: u32,
+    /// How long the full image waits for the preview process's answer
+    /// before the process counts as hung.
+    preview_wait: Duration,
     /// The stages' resolution divisors, preview first.
     divisors: Vec<u32>,
     /// Where events go.
@@ -285,6 +303,11 @@ impl Watch {
             ropts.shaders = ShaderSource::Directory(d.clone());
         }
         let renderer = Renderer::new(&ropts)?;
+        // A GPU's driver compiles in milliseconds: no preview process
+        // unless asked for.
+        let worker_command = opts.preview_process.clone().filter(|c| {
+            opts.preview_divisor > 1 && (c.on_gpus || renderer.device().device_type == "CPU")
+        });
         let session = Session::new(renderer, &scene_path, opts.load.clone());
 
         let shader_files: Vec<PathBuf> = match &shader_dir {
@@ -333,12 +356,18 @@ impl Watch {
             watcher,
             shader_dir,
             shader_files,
-            out: Output {
+            out: Arc::new(Mutex::new(Output {
                 path: opts.output.clone(),
                 format,
                 display: opts.display,
                 live: opts.serve.map(|_| live),
-            },
+            })),
+            worker: None,
+            worker_command,
+            worker_starts: 0,
+            // The preview process's own watchdog answers by then.
+            preview_wait: opts.renderer.time_limit.unwrap_or(DEFAULT_TIME_LIMIT)
+                + Duration::from_secs(2),
             divisors: if opts.preview_divisor > 1 {
                 vec![opts.preview_divisor, 1]
             } else {
@@ -435,6 +464,19 @@ impl Watch {
                 .cloned()
                 .collect()
         };
+        // The preview process compiles and renders the preview; this one
+        // applies the same changes and renders the full image.
+        let started = self.request_preview(number, b.first_event, changes, &textures);
+        let previewing = started.is_some();
+        let shader_edit = changes.shaders && !changes.scene && textures.is_empty();
+        if started == Some(false) && !first && shader_edit {
+            // A shader edit's preview is a compile: the preview process gets
+            // the cores to itself, then this one compiles (two compiles at
+            // once slowed both: docs/watch.md).
+            if let Some(w) = self.worker.as_mut() {
+                w.wait(preview::HEAD_START.min(self.preview_wait));
+            }
+        }
         let applied = self.session.apply_edits(changes, &textures);
         // The scene may now reference other files.
         let new_set = watch_set(&self.session, &self.shader_files);
@@ -452,11 +494,14 @@ impl Watch {
         }
 
         let mut errors = applied.errors;
-        let (stages, cancelled) = if applied.render {
-            self.render(b.first_event, &mut errors)
+        let (mut stages, cancelled) = if applied.render {
+            self.render(b.first_event, previewing, &mut errors)
         } else {
             (Vec::new(), false)
         };
+        if let Some(preview) = self.worker.as_mut().and_then(preview::Worker::close) {
+            stages.insert(0, preview);
+        }
         let mut reload = Reload {
             number,
             changed: b.paths.into_iter().collect(),
@@ -470,10 +515,8 @@ impl Watch {
             errors,
             line: String::new(),
         };
-        reload.line = reload.summary(applied.render, &self.divisors, |p| {
-            describe(self.shader_dir.as_deref(), p)
-        });
-        if let Some(live) = &self.out.live {
+        reload.line = reload.summary(applied.render, |p| describe(self.shader_dir.as_deref(), p));
+        if let Some(live) = &self.live() {
             let current = self
                 .session
                 .scene_error
@@ -496,6 +539,60 @@ impl Watch {
         self.number += 1;
     }
 
+    /// The live page, if the loop serves one.
+    fn live(&self) -> Option<Arc<server::Live>> {
+        self.out
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .live
+            .clone()
+    }
+
+    /// Asks the preview process for the preview of reload `number`,
+    /// starting one if there is none (a new one gets everything as
+    /// changed). Returns None if no preview process renders it, else
+    /// whether the process was started for it.
+    fn request_preview(
+        &mut self,
+        number: u64,
+        first_event: Instant,
+        changes: Changes,
+        textures: &[PathBuf],
+    ) -> Option<bool> {
+        let cmd = self.worker_command.as_ref()?;
+        if self.worker.as_ref().is_some_and(preview::Worker::is_dead) {
+            self.worker = None;
+        }
+        let mut request = preview::Request {
+            number,
+            changes,
+            textures: textures.to_vec(),
+        };
+        let started = self.worker.is_none();
+        if started {
+            if self.worker_starts >= preview::MAX_STARTS {
+                return None;
+            }
+            self.worker_starts += 1;
+            match preview::Worker::start(cmd, self.out.clone()) {
+                Ok(w) => self.worker = Some(w),
+                Err(e) => {
+                    eprintln!("warning: cannot start the preview process: {e}");
+                    return None;
+                }
+            }
+            // A new process has loaded nothing yet.
+            request.changes = Changes {
+                shaders: true,
+                scene: true,
+            };
+            request.textures.clear();
+        }
+        let w = self.worker.as_mut()?;
+        w.request(&request, first_event);
+        (!w.is_dead()).then_some(started)
+    }
+
     /// A reload while the files are those that hung the device: reports
     /// the error again and keeps the last good image.
     fn report_quarantined(&mut self, b: files::Batch, error: String) {
@@ -512,10 +609,8 @@ impl Watch {
             errors: vec![error.clone()],
             line: String::new(),
         };
-        reload.line = reload.summary(false, &self.divisors, |p| {
-            describe(self.shader_dir.as_deref(), p)
-        });
-        if let Some(live) = &self.out.live {
+        reload.line = reload.summary(false, |p| describe(self.shader_dir.as_deref(), p));
+        if let Some(live) = &self.live() {
             live.set_status(Some(error), reload.line.clone());
         }
         if !self.announced {
@@ -535,32 +630,49 @@ impl Watch {
     fn render(
         &mut self,
         first_event: Instant,
+        previewing: bool,
         errors: &mut Vec<String>,
     ) -> (Vec<StageReport>, bool) {
         let full = self.session.size().unwrap_or((1, 1));
         let mut stages = Vec::new();
         let mut write_errors = Vec::new();
         let lit_by_default = self.session.lit_by_default();
-        let (watcher, out) = (&mut self.watcher, &mut self.out);
+        let (watcher, out, worker) = (&mut self.watcher, &self.out, &mut self.worker);
+        let preview_wait = self.preview_wait;
+        // With the preview process, this process renders the full image only.
+        let divisors: &[u32] = if previewing { &[1] } else { &self.divisors };
         let rendered = self.session.render_stages(
-            &self.divisors,
+            divisors,
             || watcher.pending(),
-            |frame: StageFrame| match out.write(&frame, full, lit_by_default) {
-                Ok((encode, write)) => {
-                    let written_at = Instant::now();
-                    stages.push(StageReport {
-                        width: frame.image.width,
-                        height: frame.image.height,
-                        compile: frame.compile,
-                        render: frame.render,
-                        hits_reused: frame.hits_reused,
-                        encode,
-                        write,
-                        latency: written_at - first_event,
-                        written_at,
-                    });
+            |frame: StageFrame| {
+                if let Some(w) = worker.as_mut().filter(|_| previewing) {
+                    // The preview of this reload first, never after.
+                    w.wait(preview_wait);
                 }
-                Err(e) => write_errors.push(e),
+                let written = out.lock().unwrap_or_else(|e| e.into_inner()).write(
+                    &frame,
+                    full,
+                    lit_by_default,
+                );
+                match written {
+                    Ok((encode, write)) => {
+                        let written_at = Instant::now();
+                        stages.push(StageReport {
+                            width: frame.image.width,
+                            height: frame.image.height,
+                            compile: frame.compile,
+                            render: frame.render,
+                            hits_reused: frame.hits_reused,
+                            encode,
+                            write,
+                            latency: written_at - first_event,
+                            written_at,
+                            preview: (frame.image.width, frame.image.height) != full,
+                            worker: false,
+                        });
+                    }
+                    Err(e) => write_errors.push(e),
+                }
             },
         );
         let mut cancelled = false;
@@ -584,12 +696,7 @@ impl Reload {
     /// the reload rendered (it had something good to show); `divisors`: the
     /// stages' resolution divisors, preview first; `describe` names a
     /// changed file.
-    fn summary(
-        &self,
-        rendered: bool,
-        divisors: &[u32],
-        describe: impl Fn(&Path) -> String,
-    ) -> String {
+    fn summary(&self, rendered: bool, describe: impl Fn(&Path) -> String) -> String {
         let what = if self.number == 0 {
             "start".to_string()
         } else if self.changed.is_empty() {
@@ -638,10 +745,19 @@ impl Reload {
         if let Some(t) = self.texture_replace {
             parts.push(format!("texture replace {}", ms(t)));
         }
-        for (i, s) in self.stages.iter().enumerate() {
-            let name = if divisors[i] > 1 { "preview" } else { "full" };
+        for s in &self.stages {
+            let name = match (s.preview, s.worker) {
+                (true, true) => "preview (preview process)",
+                (true, false) => "preview",
+                (false, _) => "full",
+            };
+            // The preview process's compile is not in the line's compile.
+            let compile = match s.worker && s.compile.total() > Duration::ZERO {
+                true => format!("compile {}, ", ms(s.compile.total())),
+                false => String::new(),
+            };
             parts.push(format!(
-                "{name} {}x{}: render {}{}, encode+write {}, latency {}",
+                "{name} {}x{}: {compile}render {}{}, encode+write {}, latency {}",
                 s.width,
                 s.height,
                 ms(s.render),

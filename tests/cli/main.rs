@@ -26,6 +26,7 @@ mod gltf_render;
 mod json_textures;
 mod metrics;
 mod pipeline_cache;
+mod preview_process;
 mod setup_script;
 mod vector_width;
 mod watch;

@@ -25,7 +25,9 @@ fn the_binary_reloads_reports_errors_and_recovers() {
         "naga ",
         "pipeline ",
         "driver ",
-        "preview 16x12",
+        // On lavapipe the preview process renders the preview
+        // (cli::preview_process tests it).
+        "preview (preview process) 16x12: compile ",
         "full 64x48",
         "latency ",
     ] {

@@ -30,6 +30,7 @@ use common::ms;
 use common::stats::{median, median_min_max};
 use penumbra::loaders::{self, LoadOptions};
 use penumbra::render::{Renderer, RendererOptions, ShaderSource};
+use penumbra::watch::preview::WorkerCommand;
 use penumbra::watch::{self, Event, Reload, WatchOptions};
 
 const SHADER: &str = "shading/phong.wgsl";
@@ -124,10 +125,37 @@ struct Loop {
 }
 
 impl Loop {
-    fn start(scene: &Path, out: &Path, shaders: &Path, load: &LoadOptions) -> Loop {
+    /// A loop on `scene`; with `penumbra`, its preview renders in a preview
+    /// process of that binary (`penumbra watch`'s default on lavapipe),
+    /// else in the loop's own process (`--preview-process off`).
+    fn start(
+        scene: &Path,
+        out: &Path,
+        shaders: &Path,
+        load: &LoadOptions,
+        penumbra: Option<&Path>,
+    ) -> Loop {
         let mut opts = WatchOptions::new(scene, out);
         opts.renderer.shaders = ShaderSource::Directory(shaders.to_path_buf());
         opts.load = load.clone();
+        opts.preview_process = penumbra.map(|program| WorkerCommand {
+            program: program.to_path_buf(),
+            // The same scene, shaders and size as `opts`.
+            args: [
+                "watch".into(),
+                scene.as_os_str().to_owned(),
+                "--shaders".into(),
+                shaders.as_os_str().to_owned(),
+                "-o".into(),
+                out.as_os_str().to_owned(),
+                "--width".into(),
+                load.width.expect("a width").to_string().into(),
+                "--height".into(),
+                load.height.expect("a height").to_string().into(),
+            ]
+            .into(),
+            on_gpus: false,
+        });
         let stop = Arc::new(AtomicBool::new(false));
         let (tx, rx) = std::sync::mpsc::channel();
         let thread = {
@@ -181,10 +209,17 @@ fn measure_edits(lp: &Loop, path: &Path, src: &str, stamp: u128, tag: u64) -> La
         assert!(r.changes.shaders && !r.changes.scene, "{}", r.line);
         println!("{}", r.line);
         let preview = &r.stages[0];
+        assert!(preview.preview, "no preview: {}", r.line);
         let c = r.compile.expect("a shader edit recompiles");
         if !recompiled.contains(&c.recompiled) {
             recompiled.push(c.recompiled.clone());
         }
+        // The preview's compile: the preview process's own, or the loop's.
+        let c = if preview.worker {
+            preview.compile.clone()
+        } else {
+            c
+        };
         reused += r.stages.iter().all(|s| s.hits_reused) as usize;
         let full = r.stages.get(1);
         rows.push([
@@ -278,6 +313,13 @@ fn machine_line() -> String {
 
 fn main() -> anyhow::Result<()> {
     let report_path: Option<PathBuf> = std::env::args().nth(1).map(PathBuf::from);
+    // The binary the preview process runs: penumbra beside this one.
+    let penumbra = std::env::current_exe()?.with_file_name("penumbra");
+    anyhow::ensure!(
+        penumbra.is_file(),
+        "{} is missing: build it first (cargo build --release)",
+        penumbra.display()
+    );
     let root = &common::repo_root();
     let tmp = tempfile::tempdir()?;
     // Mesa's shader cache in a directory of this run, set before the driver
@@ -320,7 +362,12 @@ fn main() -> anyhow::Result<()> {
         % 1_000_000;
 
     // 1. A Phong edit, to the preview on disk.
-    let lp = Loop::start(&scene, &out, &shaders, &load);
+    // The same edits with the preview in the loop's own process, before the
+    // preview process's (which the rest of the run uses).
+    let lp = Loop::start(&scene, &out, &shaders, &load, None);
+    let phong_here = measure_edits(&lp, &shader_path, &shader_src, stamp, 3);
+    lp.finish()?;
+    let lp = Loop::start(&scene, &out, &shaders, &load, Some(&penumbra));
     let phong = measure_edits(&lp, &shader_path, &shader_src, stamp, 1);
 
     // 3. Stress, on the same loop.
@@ -451,7 +498,7 @@ fn main() -> anyhow::Result<()> {
         ),
     )?;
     let user_out = tmp.path().join("out_user.png");
-    let lp = Loop::start(&user_scene, &user_out, &shaders, &load);
+    let lp = Loop::start(&user_scene, &user_out, &shaders, &load, Some(&penumbra));
     let user = measure_edits(&lp, &user_path, USER_SHADER, stamp, 2);
     lp.finish()?;
 
@@ -481,8 +528,14 @@ fn main() -> anyhow::Result<()> {
          file: `src/render/stages.rs`), so a shading edit recompiles only its file's shade \
          pipeline and the render after it reruns only the shade pipelines on the hit records it \
          kept.\n\n\
+         On a CPU device `watch` renders the preview in a second process whose driver compiles \
+         quickly (`GALLIVM_PERF=nopt`, `LP_NATIVE_VECTOR_WIDTH=128`: `src/watch/preview.rs`), while \
+         the loop's process compiles its own pipeline and renders the full image; the full image \
+         waits for the preview. The compile rows of the preview process's tables are its own.\n\n\
          ## Phong edit → preview on disk (10 edits of `shaders/shading/phong.wgsl`)\n\n\
          Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\n{}\n\
+         ### The same edits with the preview in the loop's process (`--preview-process off`)\n\n\
+         Measured first, in the same run. Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\
          ## User shader edit → preview on disk (10 edits)\n\n\
          The showcase with the bunny's material switched to a user shader file \
          (`{{\"type\": \"wgsl\", \"file\": \"bands.wgsl\", ...}}`, Lambert in bands, written by the \
@@ -495,6 +548,9 @@ fn main() -> anyhow::Result<()> {
         phong.median_full,
         describe(&phong),
         phong.table,
+        verdict(&phong_here),
+        phong_here.median_full,
+        phong_here.table,
         verdict(&user),
         user.median_full,
         describe(&user),

@@ -1,0 +1,654 @@
+//! The preview in a second process, whose driver compiles quickly.
+//!
+//! On lavapipe a shading edit waits for the driver to compile the shade
+//! pipeline at its first dispatch, and that compile is most of the edit
+//! loop (docs/watch.md). How long it takes is a setting of the whole
+//! process, read once when the driver loads: `GALLIVM_PERF=nopt` skips
+//! LLVM's optimisation passes, and `LP_NATIVE_VECTOR_WIDTH=128` halves the
+//! code to select and schedule. Together they more than halved the shade
+//! pipeline's compile, gave the same image bit for bit, and ran the code
+//! nearly three times as slowly (docs/watch.md, `tools/measure/quick_compile.sh`):
+//! right for a 1/16-size preview, wrong for the full image.
+//!
+//! So `watch` on a CPU device starts a second `penumbra watch` with the same
+//! arguments, [`ENV_WORKER`] and those two settings in its environment: the
+//! *worker*. The worker loads the same scene and renders only the preview.
+//! For every reload the loop sends the worker the changes ([`Request`]),
+//! then applies them itself and renders only the full image. A thread of the
+//! loop reads the worker's answer ([`Answer`]) and writes the preview as
+//! soon as it comes. The full image waits for the preview of its own reload
+//! (or the worker's failure), so a preview never overwrites the full image;
+//! a preview of a reload the loop has finished is dropped.
+//!
+//! After a shader edit the loop gives the worker a head start
+//! ([`HEAD_START`] at most): it compiles only once the preview is on disk.
+//! Two compiles at once slowed each other on a 2-core machine, the full
+//! image's included (docs/watch.md). A scene or texture edit and the first
+//! render, whose time goes to loading, run in both processes at once.
+//!
+//! The worker's failures do not reach the user: the loop reports its own
+//! errors for the same files. A worker that dies or stops answering is
+//! killed and started again at the next reload, at most [`MAX_STARTS`]
+//! times; after that, and on a GPU (whose drivers compile in a few
+//! milliseconds) unless asked for, the loop renders the preview itself as
+//! before. The worker dies with the loop's thread (`PR_SET_PDEATHSIG`), so a
+//! restart after a hung device or Ctrl-C leaves no worker behind.
+
+use std::ffi::OsString;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::PathBuf;
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use super::stage::{Changes, CompileTimes, Session, StageFrame};
+use super::{files, Output, StageReport, WatchOptions};
+use crate::frame::Image;
+use crate::render::{Renderer, ShaderSource};
+
+/// Set (to `1`) in the worker's environment: `penumbra watch` then serves
+/// [`Request`]s on its standard input instead of running the loop.
+pub const ENV_WORKER: &str = "PENUMBRA_PREVIEW_WORKER";
+
+/// How often a loop starts a worker before it renders its previews itself.
+pub const MAX_STARTS: u32 = 3;
+
+/// How long the loop lets the worker compile alone after a shader edit
+/// before it compiles too: a preview compiles in well under it, and a shader
+/// that never ends costs the loop no more than this before its own watchdog
+/// runs.
+pub const HEAD_START: Duration = Duration::from_secs(1);
+
+/// The environment that makes lavapipe compile quickly (module docs).
+pub const QUICK_COMPILE: [(&str, &str); 2] =
+    [("GALLIVM_PERF", "nopt"), ("LP_NATIVE_VECTOR_WIDTH", "128")];
+
+/// The largest preview a worker may send, in pixels (a 16384² image at a
+/// divisor of 2); anything larger is a broken worker.
+const MAX_PIXELS: u64 = 8192 * 8192;
+
+/// How to start a worker: a `penumbra watch` command line of the same scene,
+/// shaders and options as the loop's.
+#[derive(Clone, Debug)]
+pub struct WorkerCommand {
+    /// The penumbra binary.
+    pub program: PathBuf,
+    /// Its arguments, from `watch` on.
+    pub args: Vec<OsString>,
+    /// Start one on a GPU too (`--preview-process on`); by default only on
+    /// a CPU device, whose compile is the edit loop's bottleneck.
+    pub on_gpus: bool,
+}
+
+impl WorkerCommand {
+    /// The command line of this process (the worker is `penumbra watch`
+    /// again, with the same arguments).
+    pub fn this_process(on_gpus: bool) -> std::io::Result<WorkerCommand> {
+        Ok(WorkerCommand {
+            program: std::env::current_exe()?,
+            args: std::env::args_os().skip(1).collect(),
+            on_gpus,
+        })
+    }
+}
+
+/// Whether this process is a worker ([`ENV_WORKER`]).
+pub fn is_worker() -> bool {
+    std::env::var_os(ENV_WORKER).is_some_and(|v| v == "1")
+}
+
+/// What the loop asks of the worker: apply these changes, render the
+/// preview of reload `number`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Request {
+    /// The loop's reload number.
+    pub number: u64,
+    /// What changed ([`Session::apply_edits`]).
+    pub changes: Changes,
+    /// The changed texture files, normalised.
+    pub textures: Vec<PathBuf>,
+}
+
+/// The worker's answer to a [`Request`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Answer {
+    /// The preview.
+    Image(Preview),
+    /// Nothing to show: the files did not load or compile, or the render
+    /// failed (the loop reports its own error for the same files).
+    Nothing,
+    /// The device ran past the time limit: the worker must be ended.
+    Hung,
+}
+
+/// A rendered preview and what it took.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Preview {
+    /// At the preview's resolution.
+    pub image: Image,
+    /// The full image's size, which the written preview is scaled up to.
+    pub full: (u32, u32),
+    /// The scene is lit by the default environment (its tone mapping).
+    pub lit_by_default: bool,
+    /// The worker's compile: naga, pipeline creation, driver.
+    pub compile: [Duration; 3],
+    /// Render and readback.
+    pub render: Duration,
+    /// The render reused the worker's hit records.
+    pub hits_reused: bool,
+}
+
+fn put_u32(w: &mut impl Write, v: u32) -> std::io::Result<()> {
+    w.write_all(&v.to_le_bytes())
+}
+
+fn put_u64(w: &mut impl Write, v: u64) -> std::io::Result<()> {
+    w.write_all(&v.to_le_bytes())
+}
+
+fn get<const N: usize>(r: &mut impl Read) -> std::io::Result<[u8; N]> {
+    let mut b = [0u8; N];
+    r.read_exact(&mut b)?;
+    Ok(b)
+}
+
+fn get_u32(r: &mut impl Read) -> std::io::Result<u32> {
+    get::<4>(r).map(u32::from_le_bytes)
+}
+
+fn get_u64(r: &mut impl Read) -> std::io::Result<u64> {
+    get::<8>(r).map(u64::from_le_bytes)
+}
+
+fn invalid(what: &str) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!("preview worker: {what}"),
+    )
+}
+
+impl Request {
+    /// The longest path a request carries, in bytes.
+    const MAX_PATH: u32 = 1 << 16;
+    /// The most texture files a request carries.
+    const MAX_TEXTURES: u32 = 1 << 16;
+
+    /// Writes the request: number, change flags, then each texture path
+    /// with its length.
+    pub fn write(&self, w: &mut impl Write) -> std::io::Result<()> {
+        use std::os::unix::ffi::OsStrExt as _;
+        put_u64(w, self.number)?;
+        let flags = self.changes.shaders as u8 | (self.changes.scene as u8) << 1;
+        w.write_all(&[flags])?;
+        put_u32(w, self.textures.len() as u32)?;
+        for t in &self.textures {
+            let b = t.as_os_str().as_bytes();
+            put_u32(w, b.len() as u32)?;
+            w.write_all(b)?;
+        }
+        w.flush()
+    }
+
+    /// Reads a request; `Ok(None)` at the end of the stream (the loop ended).
+    pub fn read(r: &mut impl Read) -> std::io::Result<Option<Request>> {
+        use std::os::unix::ffi::OsStringExt as _;
+        let number = match get_u64(r) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        let [flags] = get::<1>(r)?;
+        let n = get_u32(r)?;
+        if n > Self::MAX_TEXTURES {
+            return Err(invalid("too many texture files"));
+        }
+        let mut textures = Vec::with_capacity(n as usize);
+        for _ in 0..n {
+            let len = get_u32(r)?;
+            if len > Self::MAX_PATH {
+                return Err(invalid("a path too long"));
+            }
+            let mut b = vec![0u8; len as usize];
+            r.read_exact(&mut b)?;
+            textures.push(PathBuf::from(OsString::from_vec(b)));
+        }
+        Ok(Some(Request {
+            number,
+            changes: Changes {
+                shaders: flags & 1 != 0,
+                scene: flags & 2 != 0,
+            },
+            textures,
+        }))
+    }
+}
+
+impl Answer {
+    /// Writes the answer to request `number`.
+    pub fn write(&self, number: u64, w: &mut impl Write) -> std::io::Result<()> {
+        put_u64(w, number)?;
+        match self {
+            Answer::Nothing => w.write_all(&[0])?,
+            Answer::Hung => w.write_all(&[1])?,
+            Answer::Image(p) => {
+                w.write_all(&[2, p.lit_by_default as u8, p.hits_reused as u8])?;
+                for v in [p.image.width, p.image.height, p.full.0, p.full.1] {
+                    put_u32(w, v)?;
+                }
+                for d in p.compile.iter().chain([&p.render]) {
+                    put_u64(w, d.as_nanos().min(u64::MAX as u128) as u64)?;
+                }
+                w.write_all(bytemuck::cast_slice(&p.image.pixels))?;
+            }
+        }
+        w.flush()
+    }
+
+    /// Reads an answer and the number of its request.
+    pub fn read(r: &mut impl Read) -> std::io::Result<(u64, Answer)> {
+        let number = get_u64(r)?;
+        let [kind] = get::<1>(r)?;
+        let answer = match kind {
+            0 => Answer::Nothing,
+            1 => Answer::Hung,
+            2 => {
+                let [lit_by_default, hits_reused] = get::<2>(r)?;
+                let [width, height, fw, fh] = [get_u32(r)?, get_u32(r)?, get_u32(r)?, get_u32(r)?];
+                let pixels = width as u64 * height as u64;
+                if pixels == 0
+                    || pixels > MAX_PIXELS
+                    || fw < width
+                    || fh < height
+                    || fw > 16384
+                    || fh > 16384
+                {
+                    return Err(invalid("an image of an impossible size"));
+                }
+                let mut t = [Duration::ZERO; 4];
+                for d in &mut t {
+                    *d = Duration::from_nanos(get_u64(r)?);
+                }
+                let mut px = vec![[0f32; 4]; pixels as usize];
+                r.read_exact(bytemuck::cast_slice_mut(&mut px))?;
+                Answer::Image(Preview {
+                    image: Image {
+                        width,
+                        height,
+                        pixels: px,
+                    },
+                    full: (fw, fh),
+                    lit_by_default: lit_by_default != 0,
+                    compile: [t[0], t[1], t[2]],
+                    render: t[3],
+                    hits_reused: hits_reused != 0,
+                })
+            }
+            _ => return Err(invalid("an unknown answer")),
+        };
+        Ok((number, answer))
+    }
+}
+
+/// The worker: serves [`Request`]s from standard input until it closes,
+/// answering each on standard output. `opts` are the loop's (the worker
+/// was started with the same arguments); only the scene, the renderer, the
+/// load options and the preview divisor matter here.
+pub fn serve(opts: &WatchOptions) -> anyhow::Result<()> {
+    let mut ropts = opts.renderer.clone();
+    if let ShaderSource::Directory(d) = &ropts.shaders {
+        ropts.shaders = ShaderSource::Directory(d.canonicalize()?);
+    }
+    let renderer = Renderer::new(&ropts)?;
+    let mut session = Session::new(renderer, &files::normalise(&opts.scene), opts.load.clone());
+    let divisor = opts.preview_divisor.max(1);
+    let mut input = BufReader::new(std::io::stdin().lock());
+    let mut output = BufWriter::new(std::io::stdout().lock());
+    while let Some(req) = Request::read(&mut input)? {
+        let answer = preview_of(&mut session, &req, divisor);
+        answer.write(req.number, &mut output)?;
+        if matches!(answer, Answer::Hung) {
+            // The dispatch that never ends keeps a driver thread: only the
+            // end of the process frees it, and the loop kills this one.
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// Applies one request's changes and renders the preview.
+fn preview_of(session: &mut Session, req: &Request, divisor: u32) -> Answer {
+    let applied = session.apply_edits(req.changes, &req.textures);
+    if session.is_hung() {
+        return Answer::Hung;
+    }
+    if !applied.render {
+        return Answer::Nothing;
+    }
+    let Some(full) = session.size() else {
+        return Answer::Nothing;
+    };
+    let mut preview = None;
+    let rendered = session.render_stages(&[divisor], || false, |f: StageFrame| preview = Some(f));
+    if session.is_hung() {
+        return Answer::Hung;
+    }
+    match (rendered, preview) {
+        (Ok(_), Some(f)) => {
+            // The compile of the edit (apply_edits') and of the first
+            // dispatch (the render's) together.
+            let c = applied.compile.unwrap_or_default();
+            Answer::Image(Preview {
+                image: f.image,
+                full,
+                lit_by_default: session.lit_by_default(),
+                compile: [
+                    c.naga + f.compile.naga,
+                    c.pipeline + f.compile.pipeline,
+                    c.driver + f.compile.driver,
+                ],
+                render: f.render,
+                hits_reused: f.hits_reused,
+            })
+        }
+        _ => Answer::Nothing,
+    }
+}
+
+/// What the loop and its reader thread share.
+struct Shared {
+    state: Mutex<State>,
+    answered: Condvar,
+}
+
+#[derive(Default)]
+struct State {
+    /// The reload whose preview is awaited.
+    open: Option<Open>,
+    /// The worker ended or broke the protocol.
+    dead: bool,
+}
+
+struct Open {
+    number: u64,
+    first_event: Instant,
+    answered: bool,
+    stage: Option<StageReport>,
+}
+
+/// The loop's side of a worker: the child process, the pipe to it, and the
+/// thread that writes its previews.
+pub struct Worker {
+    child: Child,
+    input: BufWriter<ChildStdin>,
+    shared: Arc<Shared>,
+    reader: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Worker {
+    /// Starts a worker; its previews are written to `out`.
+    pub(super) fn start(cmd: &WorkerCommand, out: Arc<Mutex<Output>>) -> std::io::Result<Worker> {
+        let mut c = Command::new(&cmd.program);
+        c.args(&cmd.args)
+            .env(ENV_WORKER, "1")
+            // Two processes must not rewrite one pipeline cache file.
+            .env("PENUMBRA_PIPELINE_CACHE", "0")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            // The loop reports the errors of the same files itself.
+            .stderr(Stdio::null());
+        for (k, v) in QUICK_COMPILE {
+            c.env(k, v);
+        }
+        // SAFETY: prctl is async-signal-safe and touches no Rust state.
+        unsafe {
+            use std::os::unix::process::CommandExt as _;
+            c.pre_exec(|| {
+                // Killed when the thread that started it (the loop's) ends.
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let mut child = c.spawn()?;
+        let input = BufWriter::new(child.stdin.take().expect("piped"));
+        let output = child.stdout.take().expect("piped");
+        let shared = Arc::new(Shared {
+            state: Mutex::new(State::default()),
+            answered: Condvar::new(),
+        });
+        let reader = {
+            let shared = shared.clone();
+            std::thread::Builder::new()
+                .name("preview".into())
+                .spawn(move || read_answers(output, &shared, &out))?
+        };
+        Ok(Worker {
+            child,
+            input,
+            shared,
+            reader: Some(reader),
+        })
+    }
+
+    /// Whether the worker ended or broke the protocol.
+    pub(super) fn is_dead(&self) -> bool {
+        self.shared
+            .state
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .dead
+    }
+
+    /// Asks for the preview of reload `number`.
+    pub(super) fn request(&mut self, req: &Request, first_event: Instant) {
+        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.open = Some(Open {
+            number: req.number,
+            first_event,
+            answered: false,
+            stage: None,
+        });
+        drop(st);
+        if req.write(&mut self.input).is_err() {
+            self.mark_dead();
+        }
+    }
+
+    /// Waits until the worker answered the open request (the preview is
+    /// then on disk, if it rendered one), died, or `limit` passed (then it
+    /// is counted as hung and killed).
+    pub(super) fn wait(&mut self, limit: Duration) {
+        let deadline = Instant::now() + limit;
+        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            let waiting = !st.dead && st.open.as_ref().is_some_and(|o| !o.answered);
+            if !waiting {
+                return;
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                drop(st);
+                self.mark_dead();
+                return;
+            }
+            st = self
+                .shared
+                .answered
+                .wait_timeout(st, deadline - now)
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+        }
+    }
+
+    /// Closes the open request: returns its preview stage if it was
+    /// written; an answer that comes later is dropped.
+    pub(super) fn close(&mut self) -> Option<StageReport> {
+        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.open.take().and_then(|o| o.stage)
+    }
+
+    fn mark_dead(&mut self) {
+        let _ = self.child.kill();
+        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.dead = true;
+        self.shared.answered.notify_all();
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        if let Some(r) = self.reader.take() {
+            let _ = r.join();
+        }
+    }
+}
+
+/// The reader thread: writes each preview of the open reload as it comes.
+fn read_answers(output: ChildStdout, shared: &Shared, out: &Mutex<Output>) {
+    let mut output = BufReader::new(output);
+    loop {
+        let answer = Answer::read(&mut output);
+        let mut st = shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        let (number, answer) = match answer {
+            Ok(a) => a,
+            Err(_) => {
+                st.dead = true;
+                shared.answered.notify_all();
+                return;
+            }
+        };
+        let Some(first_event) = st
+            .open
+            .as_ref()
+            .filter(|o| o.number == number && !o.answered)
+            .map(|o| o.first_event)
+        else {
+            continue;
+        };
+        let stage = match answer {
+            Answer::Image(p) => write_preview(p, first_event, out),
+            Answer::Nothing => None,
+            Answer::Hung => {
+                st.dead = true;
+                None
+            }
+        };
+        if let Some(o) = st.open.as_mut() {
+            o.stage = stage;
+            o.answered = true;
+        }
+        shared.answered.notify_all();
+    }
+}
+
+/// Writes a worker's preview to the output; its stage report, or None if
+/// it could not be written (the full image will be).
+fn write_preview(p: Preview, first_event: Instant, out: &Mutex<Output>) -> Option<StageReport> {
+    let frame = StageFrame {
+        image: p.image,
+        compile: CompileTimes {
+            naga: p.compile[0],
+            pipeline: p.compile[1],
+            driver: p.compile[2],
+            recompiled: Vec::new(),
+        },
+        render: p.render,
+        hits_reused: p.hits_reused,
+    };
+    let (encode, write) = out
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .write(&frame, p.full, p.lit_by_default)
+        .ok()?;
+    let written_at = Instant::now();
+    Some(StageReport {
+        width: frame.image.width,
+        height: frame.image.height,
+        compile: frame.compile,
+        render: frame.render,
+        hits_reused: frame.hits_reused,
+        encode,
+        write,
+        latency: written_at - first_event,
+        written_at,
+        preview: true,
+        worker: true,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn requests_and_answers_survive_the_pipe() {
+        let req = Request {
+            number: 7,
+            changes: Changes {
+                shaders: true,
+                scene: false,
+            },
+            textures: vec![PathBuf::from("/a/b c.png"), PathBuf::from("/é\n.png")],
+        };
+        let mut buf = Vec::new();
+        req.write(&mut buf).unwrap();
+        let mut r = buf.as_slice();
+        assert_eq!(Request::read(&mut r).unwrap(), Some(req));
+        assert_eq!(Request::read(&mut r).unwrap(), None, "end of stream");
+
+        let p = Preview {
+            image: Image {
+                width: 2,
+                height: 1,
+                pixels: vec![[0.25, 0.5, 1.0, 1.0], [f32::MAX, 0.0, -0.0, 1.0]],
+            },
+            full: (8, 4),
+            lit_by_default: true,
+            compile: [
+                Duration::from_micros(1),
+                Duration::from_millis(2),
+                Duration::from_millis(60),
+            ],
+            render: Duration::from_micros(900),
+            hits_reused: true,
+        };
+        for a in [Answer::Image(p), Answer::Nothing, Answer::Hung] {
+            let mut buf = Vec::new();
+            a.write(9, &mut buf).unwrap();
+            assert_eq!(Answer::read(&mut buf.as_slice()).unwrap(), (9, a));
+        }
+    }
+
+    #[test]
+    fn a_broken_answer_is_an_error_not_an_allocation() {
+        // An image of 2^32 - 1 × 2^32 - 1 pixels.
+        let mut buf = Vec::new();
+        put_u64(&mut buf, 1).unwrap();
+        buf.extend([2, 0, 0]);
+        for v in [u32::MAX, u32::MAX, u32::MAX, u32::MAX] {
+            put_u32(&mut buf, v).unwrap();
+        }
+        assert!(Answer::read(&mut buf.as_slice()).is_err());
+        // A preview larger than its full image.
+        let mut buf = Vec::new();
+        put_u64(&mut buf, 1).unwrap();
+        buf.extend([2, 0, 0]);
+        for v in [16, 16, 8, 8] {
+            put_u32(&mut buf, v).unwrap();
+        }
+        assert!(Answer::read(&mut buf.as_slice()).is_err());
+        // An unknown kind, and a truncated request.
+        let mut buf = Vec::new();
+        put_u64(&mut buf, 1).unwrap();
+        buf.push(9);
+        assert!(Answer::read(&mut buf.as_slice()).is_err());
+        let mut buf = Vec::new();
+        put_u64(&mut buf, 1).unwrap();
+        buf.push(1);
+        put_u32(&mut buf, u32::MAX).unwrap();
+        assert!(Request::read(&mut buf.as_slice()).is_err());
+    }
+}
