@@ -79,6 +79,10 @@ pub struct WatchOptions {
     /// Render the preview in a second process whose driver compiles quickly
     /// ([`preview`]); None: the loop renders it.
     pub preview_process: Option<preview::WorkerCommand>,
+    /// After a shader edit, how long the loop lets the preview process
+    /// compile alone before it compiles too ([`preview::HEAD_START`]; zero:
+    /// both at once).
+    pub preview_head_start: Duration,
 }
 
 impl WatchOptions {
@@ -99,6 +103,7 @@ impl WatchOptions {
             debounce: Duration::from_millis(30),
             resume: restart::Resume::default(),
             preview_process: None,
+            preview_head_start: preview::HEAD_START,
         }
     }
 }
@@ -261,6 +266,8 @@ struct Watch {
     worker_command: Option<preview::WorkerCommand>,
     /// How many were started.
     worker_starts: u32,
+    /// [`WatchOptions::preview_head_start`].
+    head_start: Duration,
     /// How long the full image waits for the preview process's answer
     /// before the process counts as hung.
     preview_wait: Duration,
@@ -365,6 +372,7 @@ impl Watch {
             worker: None,
             worker_command,
             worker_starts: 0,
+            head_start: opts.preview_head_start,
             // The preview process's own watchdog answers by then.
             preview_wait: opts.renderer.time_limit.unwrap_or(DEFAULT_TIME_LIMIT)
                 + Duration::from_secs(2),
@@ -469,12 +477,12 @@ impl Watch {
         let started = self.request_preview(number, b.first_event, changes, &textures);
         let previewing = started.is_some();
         let shader_edit = changes.shaders && !changes.scene && textures.is_empty();
-        if started == Some(false) && !first && shader_edit {
+        if started == Some(false) && !first && shader_edit && !self.head_start.is_zero() {
             // A shader edit's preview is a compile: the preview process gets
             // the cores to itself, then this one compiles (two compiles at
             // once slowed both: docs/watch.md).
             if let Some(w) = self.worker.as_mut() {
-                w.wait(preview::HEAD_START.min(self.preview_wait));
+                w.wait(self.head_start);
             }
         }
         let applied = self.session.apply_edits(changes, &textures);

@@ -134,6 +134,7 @@ impl Loop {
         shaders: &Path,
         load: &LoadOptions,
         penumbra: Option<&Path>,
+        head_start: Duration,
     ) -> Loop {
         let mut opts = WatchOptions::new(scene, out);
         opts.renderer.shaders = ShaderSource::Directory(shaders.to_path_buf());
@@ -156,6 +157,7 @@ impl Loop {
             .into(),
             on_gpus: false,
         });
+        opts.preview_head_start = head_start;
         let stop = Arc::new(AtomicBool::new(false));
         let (tx, rx) = std::sync::mpsc::channel();
         let thread = {
@@ -364,10 +366,22 @@ fn main() -> anyhow::Result<()> {
     // 1. A Phong edit, to the preview on disk.
     // The same edits with the preview in the loop's own process, before the
     // preview process's (which the rest of the run uses).
-    let lp = Loop::start(&scene, &out, &shaders, &load, None);
+    let head_start = watch::preview::HEAD_START;
+    let lp = Loop::start(&scene, &out, &shaders, &load, None, head_start);
     let phong_here = measure_edits(&lp, &shader_path, &shader_src, stamp, 3);
     lp.finish()?;
-    let lp = Loop::start(&scene, &out, &shaders, &load, Some(&penumbra));
+    // And with both processes compiling at once.
+    let lp = Loop::start(
+        &scene,
+        &out,
+        &shaders,
+        &load,
+        Some(&penumbra),
+        Duration::ZERO,
+    );
+    let phong_both = measure_edits(&lp, &shader_path, &shader_src, stamp, 4);
+    lp.finish()?;
+    let lp = Loop::start(&scene, &out, &shaders, &load, Some(&penumbra), head_start);
     let phong = measure_edits(&lp, &shader_path, &shader_src, stamp, 1);
 
     // 3. Stress, on the same loop.
@@ -498,7 +512,14 @@ fn main() -> anyhow::Result<()> {
         ),
     )?;
     let user_out = tmp.path().join("out_user.png");
-    let lp = Loop::start(&user_scene, &user_out, &shaders, &load, Some(&penumbra));
+    let lp = Loop::start(
+        &user_scene,
+        &user_out,
+        &shaders,
+        &load,
+        Some(&penumbra),
+        head_start,
+    );
     let user = measure_edits(&lp, &user_path, USER_SHADER, stamp, 2);
     lp.finish()?;
 
@@ -529,13 +550,15 @@ fn main() -> anyhow::Result<()> {
          pipeline and the render after it reruns only the shade pipelines on the hit records it \
          kept.\n\n\
          On a CPU device `watch` renders the preview in a second process whose driver compiles \
-         quickly (`GALLIVM_PERF=nopt`, `LP_NATIVE_VECTOR_WIDTH=128`: `src/watch/preview.rs`), while \
-         the loop's process compiles its own pipeline and renders the full image; the full image \
-         waits for the preview. The compile rows of the preview process's tables are its own.\n\n\
+         quickly (`GALLIVM_PERF=nopt`, `LP_NATIVE_VECTOR_WIDTH=128`: `src/watch/preview.rs`); the \
+         loop's process compiles its own pipeline once the preview is on disk (after a shader edit) \
+         and renders the full image. The compile rows of the preview process's tables are its own.\n\n\
          ## Phong edit → preview on disk (10 edits of `shaders/shading/phong.wgsl`)\n\n\
          Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\n{}\n\
          ### The same edits with the preview in the loop's process (`--preview-process off`)\n\n\
          Measured first, in the same run. Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\
+         ### The same edits with both processes compiling at once (no head start)\n\n\
+         Measured second, in the same run. Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\
          ## User shader edit → preview on disk (10 edits)\n\n\
          The showcase with the bunny's material switched to a user shader file \
          (`{{\"type\": \"wgsl\", \"file\": \"bands.wgsl\", ...}}`, Lambert in bands, written by the \
@@ -551,6 +574,9 @@ fn main() -> anyhow::Result<()> {
         verdict(&phong_here),
         phong_here.median_full,
         phong_here.table,
+        verdict(&phong_both),
+        phong_both.median_full,
+        phong_both.table,
         verdict(&user),
         user.median_full,
         describe(&user),
