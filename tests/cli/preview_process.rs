@@ -61,8 +61,12 @@ fn the_worker_renders_the_loops_preview_and_survives_a_broken_shader() {
         answer
     };
 
-    // Compiled without LLVM's optimisations at 128 bits, the same image,
-    // bit for bit, as the loop's own 16×12 preview.
+    // Compiled without LLVM's optimisations at 128 bits, the image of the
+    // loop's own 16×12 preview: bit for bit on the Zen 4 of docs/watch.md.
+    // The bound allows only what another CPU may give at another SIMD width
+    // (lavapipe picks its rsqrt and rcp approximations per width and
+    // instruction set, each within 2^-12 before a Newton step); a wrong
+    // scene, size, shader or setting is off by far more.
     let Answer::Image(p) = ask(0, EVERYTHING) else {
         panic!("no preview");
     };
@@ -73,7 +77,16 @@ fn the_worker_renders_the_loops_preview_and_survives_a_broken_shader() {
         p.image.pixels.iter().any(|px| px[0] > 0.1),
         "the sphere is lit"
     );
-    assert_eq!(p.image, want);
+    assert_eq!((want.width, want.height), (16, 12));
+    let off = p
+        .image
+        .pixels
+        .iter()
+        .flatten()
+        .zip(want.pixels.iter().flatten())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0f32, f32::max);
+    assert!(off <= 1e-4, "the loop's preview differs by {off}");
 
     // A broken shader: nothing to show; then a good one renders on the
     // kept hit records.
