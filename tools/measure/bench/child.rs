@@ -51,6 +51,9 @@ pub fn child_with<T: for<'de> Deserialize<'de>>(
     if let Some(d) = &args.device.device {
         cmd.args(["--device", d]);
     }
+    if args.subdivide > 0 {
+        cmd.args(["--subdivide", &args.subdivide.to_string()]);
+    }
     cmd.env("MESA_SHADER_CACHE_DISABLE", "true");
     for (k, v) in env {
         cmd.env(k, v);

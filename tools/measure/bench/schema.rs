@@ -360,6 +360,12 @@ pub struct PeersPart {
     /// Every penumbra frame of the part.
     pub penumbra_ms: Stat,
     pub peers: Vec<PeerRun>,
+    /// The device penumbra ran on (absent from runs before it was kept).
+    #[serde(default)]
+    pub device: Option<Device>,
+    /// The triangles of the scene (absent from runs before it was kept).
+    #[serde(default)]
+    pub triangles: u64,
 }
 
 /// The driver matrix (`crate::parts::drivers`): the bunny and the showcase

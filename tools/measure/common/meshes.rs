@@ -315,3 +315,92 @@ pub fn textured_bunny_scene(root: &Path, masked: bool) -> anyhow::Result<Scene> 
         .map_err(|e| anyhow::anyhow!("the textured bunny scene: {e:?}"))?;
     Ok(scene)
 }
+
+/// Writes `src` (a binary glTF file whose node 0 draws mesh 0, the bunny,
+/// with no transform: scenes/bunny_scene.glb) to `out` with mesh 0's
+/// triangles replaced by `mesh`'s, positions as the f32 the renderer
+/// uploads: so that a peer that builds its scene from a .glb file renders
+/// the same subdivided bunny as penumbra's in-memory `subdivided_bunny`.
+pub fn write_glb_with_bunny(src: &Path, mesh: &Mesh, out: &Path) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    let data = std::fs::read(src).with_context(|| src.display().to_string())?;
+    let word = |at: usize| -> anyhow::Result<usize> {
+        let b = data.get(at..at + 4).context("a truncated .glb")?;
+        Ok(u32::from_le_bytes(b.try_into().expect("4 bytes")) as usize)
+    };
+    anyhow::ensure!(
+        data.get(..4) == Some(b"glTF".as_slice()),
+        "{}: not a .glb",
+        src.display()
+    );
+    let json_len = word(12)?;
+    let mut doc: serde_json::Value = serde_json::from_slice(&data[20..20 + json_len])?;
+    let bin_at = 20 + json_len;
+    let bin_len = word(bin_at)?;
+    let mut bin = data[bin_at + 8..bin_at + 8 + bin_len].to_vec();
+    anyhow::ensure!(
+        doc["nodes"][0]["mesh"] == 0
+            && ["matrix", "translation", "rotation", "scale"]
+                .iter()
+                .all(|k| doc["nodes"][0].get(k).is_none()),
+        "{}: node 0 must draw mesh 0 without a transform",
+        src.display()
+    );
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let positions: Vec<f32> = mesh
+        .positions
+        .iter()
+        .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32])
+        .collect();
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for p in positions.chunks_exact(3) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
+    let views = doc["bufferViews"].as_array().map_or(0, Vec::len);
+    let accessors = doc["accessors"].as_array().map_or(0, Vec::len);
+    let mut add = |bytes: &[u8], target: u32| -> serde_json::Value {
+        let view = serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target});
+        bin.extend_from_slice(bytes);
+        view
+    };
+    let pos_bytes: Vec<u8> = positions.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let idx_bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let pos_view = add(&pos_bytes, 34962);
+    let idx_view = add(&idx_bytes, 34963);
+    let views_json = doc["bufferViews"]
+        .as_array_mut()
+        .context("no bufferViews")?;
+    views_json.extend([pos_view, idx_view]);
+    doc["accessors"]
+        .as_array_mut()
+        .context("no accessors")?
+        .extend([
+            serde_json::json!({"bufferView": views, "componentType": 5126, "count": mesh.positions.len(), "type": "VEC3", "min": lo, "max": hi}),
+            serde_json::json!({"bufferView": views + 1, "componentType": 5125, "count": indices.len(), "type": "SCALAR"}),
+        ]);
+    let prim = &mut doc["meshes"][0]["primitives"][0];
+    prim["attributes"] = serde_json::json!({"POSITION": accessors});
+    prim["indices"] = serde_json::json!(accessors + 1);
+    doc["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    let mut json = serde_json::to_vec(&doc)?;
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut glb = Vec::with_capacity(28 + json.len() + bin.len());
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&bin);
+    std::fs::write(out, glb).with_context(|| out.display().to_string())
+}

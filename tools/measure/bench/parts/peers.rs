@@ -163,11 +163,17 @@ struct Server {
 }
 
 impl Server {
-    fn start(python: &Path, root: &Path, peer: &str, threads: usize) -> anyhow::Result<Server> {
+    fn start(
+        python: &Path,
+        root: &Path,
+        scene: &Path,
+        peer: &str,
+        threads: usize,
+    ) -> anyhow::Result<Server> {
         let mut child = Command::new(python)
             .arg(root.join("tools/measure/peers/peers.py"))
             .args(["serve", peer, "--threads", &threads.to_string(), "--scene"])
-            .arg(root.join("scenes/bunny_scene.glb"))
+            .arg(scene)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .spawn()?;
@@ -204,13 +210,19 @@ impl Server {
 }
 
 /// Starts a peer and reads its ready line: facts and counts, or the error.
-fn start_peer(python: &Path, root: &Path, peer: &str, threads: usize) -> (PeerRun, Option<Server>) {
+fn start_peer(
+    python: &Path,
+    root: &Path,
+    scene: &Path,
+    peer: &str,
+    threads: usize,
+) -> (PeerRun, Option<Server>) {
     let mut run = PeerRun {
         peer: peer.into(),
         threads,
         ..Default::default()
     };
-    let ready = Server::start(python, root, peer, threads).and_then(|mut s| {
+    let ready = Server::start(python, root, scene, peer, threads).and_then(|mut s| {
         let v = s.line()?;
         Ok((s, v))
     });
@@ -260,7 +272,31 @@ pub fn run(args: &Args) -> anyhow::Result<PeersPart> {
         Some(p) => Some(p),
     };
     let mut r = crate::measure::renderer(args)?;
-    let bunny = common::meshes::bunny_scene(&root)?;
+    out.device = Some(crate::measure::device(&r));
+    let mut bunny = common::meshes::bunny_scene(&root)?;
+    // The peers read the scene from a .glb file: with `--subdivide`, one
+    // holding the subdivided bunny's triangles.
+    let glb_dir = tempfile::tempdir()?;
+    let mut glb = root.join("scenes/bunny_scene.glb");
+    if args.subdivide > 0 {
+        bunny = common::meshes::subdivided_bunny(&bunny, args.subdivide);
+        // The peers shade with the triangles' own normals, as penumbra does
+        // the file's bunny, which has none: so does the subdivided one here
+        // (with the subdivision's vertex normals, 6% of the shadow rays that
+        // were blocked differed: the comparison was void).
+        common::meshes::bunny_mesh(&mut bunny).normals = None;
+        let sub = glb_dir.path().join("bunny_subdivided.glb");
+        common::meshes::write_glb_with_bunny(&glb, common::meshes::bunny_mesh(&mut bunny), &sub)?;
+        glb = sub;
+    }
+    out.triangles = bunny
+        .objects
+        .iter()
+        .map(|o| match &o.shape {
+            penumbra::scene::Shape::Mesh(m) => m.indices.len() as u64,
+            _ => 0,
+        })
+        .sum();
     out.penumbra = penumbra_counts(&mut r, &bunny)?;
     let Some(python) = python else {
         return Ok(out);
@@ -286,7 +322,7 @@ pub fn run(args: &Args) -> anyhow::Result<PeersPart> {
     let mut servers = Vec::new();
     for peer in peers.iter().copied() {
         eprintln!("  peers: starting {peer}");
-        let (run, server) = start_peer(&python, &root, peer, threads);
+        let (run, server) = start_peer(&python, &root, &glb, peer, threads);
         if let Some(e) = &run.error {
             eprintln!("  peers: {peer} failed: {e}");
         }
