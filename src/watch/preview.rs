@@ -28,8 +28,8 @@
 //!
 //! The worker's failures do not reach the user: the loop reports its own
 //! errors for the same files. A worker that dies or stops answering is
-//! killed and started again at the next reload, at most [`MAX_STARTS`]
-//! times; after that, and on a GPU (whose drivers compile in a few
+//! killed and another started at the next reload, [`MAX_STARTS`] in all;
+//! after that, and on a GPU (whose drivers compile in a few
 //! milliseconds) unless asked for, the loop renders the preview itself as
 //! before. The worker dies with the loop's thread (`PR_SET_PDEATHSIG`), so a
 //! restart after a hung device or Ctrl-C leaves no worker behind.
