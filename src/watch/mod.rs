@@ -657,28 +657,14 @@ impl Watch {
                     // The preview of this reload first, never after.
                     w.wait(preview_wait);
                 }
-                let written = out.lock().unwrap_or_else(|e| e.into_inner()).write(
-                    &frame,
+                let written = out.lock().unwrap_or_else(|e| e.into_inner()).write_stage(
+                    frame,
                     full,
                     lit_by_default,
+                    first_event,
                 );
                 match written {
-                    Ok((encode, write)) => {
-                        let written_at = Instant::now();
-                        stages.push(StageReport {
-                            width: frame.image.width,
-                            height: frame.image.height,
-                            compile: frame.compile,
-                            render: frame.render,
-                            hits_reused: frame.hits_reused,
-                            encode,
-                            write,
-                            latency: written_at - first_event,
-                            written_at,
-                            preview: (frame.image.width, frame.image.height) != full,
-                            worker: false,
-                        });
-                    }
+                    Ok(stage) => stages.push(stage),
                     Err(e) => write_errors.push(e),
                 }
             },
@@ -830,6 +816,32 @@ struct Output {
 }
 
 impl Output {
+    /// Writes a stage ([`Output::write`]) and reports it: its latency from
+    /// `first_event`, and whether it is a preview (smaller than `full`).
+    fn write_stage(
+        &mut self,
+        frame: StageFrame,
+        full: (u32, u32),
+        lit_by_default: bool,
+        first_event: Instant,
+    ) -> Result<StageReport, String> {
+        let (encode, write) = self.write(&frame, full, lit_by_default)?;
+        let written_at = Instant::now();
+        Ok(StageReport {
+            width: frame.image.width,
+            height: frame.image.height,
+            compile: frame.compile,
+            render: frame.render,
+            hits_reused: frame.hits_reused,
+            encode,
+            write,
+            latency: written_at - first_event,
+            written_at,
+            preview: (frame.image.width, frame.image.height) != full,
+            worker: false,
+        })
+    }
+
     /// Writes a stage (scaled up to `full`) atomically, without a sync
     /// ([`Durability::NoSync`]: the next stage or save rewrites it); returns
     /// the encode and write times.

@@ -558,24 +558,14 @@ fn write_preview(p: Preview, first_event: Instant, out: &Mutex<Output>) -> Optio
         render: p.render,
         hits_reused: p.hits_reused,
     };
-    let (encode, write) = out
+    let stage = out
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .write(&frame, p.full, p.lit_by_default)
+        .write_stage(frame, p.full, p.lit_by_default, first_event)
         .ok()?;
-    let written_at = Instant::now();
     Some(StageReport {
-        width: frame.image.width,
-        height: frame.image.height,
-        compile: frame.compile,
-        render: frame.render,
-        hits_reused: frame.hits_reused,
-        encode,
-        write,
-        latency: written_at - first_event,
-        written_at,
-        preview: true,
         worker: true,
+        ..stage
     })
 }
 

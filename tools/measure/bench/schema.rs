@@ -361,10 +361,10 @@ pub struct PeersPart {
     pub penumbra_ms: Stat,
     pub peers: Vec<PeerRun>,
     /// The device penumbra ran on (absent from runs before it was kept).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub device: Option<Device>,
     /// The triangles of the scene (absent from runs before it was kept).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub triangles: u64,
 }
 
@@ -429,4 +429,9 @@ pub struct CliPart {
     pub cold_ms: Stat,
     /// Wall time of each process with a warm shader cache, ms.
     pub warm_ms: Stat,
+}
+
+/// For `skip_serializing_if`: a count absent from older results.
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
