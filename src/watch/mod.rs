@@ -20,7 +20,8 @@
 //! full-resolution stage, and one that arrives during the full-resolution
 //! stage stops it between two bands of 64 rows
 //! ([`crate::render::RenderRequest::cancellable`]); the preview itself
-//! always completes.
+//! always completes. With the preview process ([`preview`]) the loop's full
+//! image is its only stage, and a newer edit stops it between bands too.
 
 pub mod files;
 pub mod preview;
@@ -649,8 +650,11 @@ impl Watch {
         let preview_wait = self.preview_wait;
         // With the preview process, this process renders the full image only.
         let divisors: &[u32] = if previewing { &[1] } else { &self.divisors };
-        let rendered = self.session.render_stages(
+        // The full image stops between bands for a newer edit even when it
+        // is this process's only stage: the preview process showed one.
+        let rendered = self.session.render_stages_with(
             divisors,
+            previewing,
             || watcher.pending(),
             |frame: StageFrame| {
                 if let Some(w) = worker.as_mut().filter(|_| previewing) {

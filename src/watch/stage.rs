@@ -427,6 +427,20 @@ impl Session {
     pub fn render_stages(
         &mut self,
         divisors: &[u32],
+        cancel: impl FnMut() -> bool,
+        write: impl FnMut(StageFrame),
+    ) -> Result<bool, String> {
+        self.render_stages_with(divisors, false, cancel, write)
+    }
+
+    /// [`Session::render_stages`], whose first stage also stops between
+    /// bands when `first_cancellable` (the loop's full image when the
+    /// preview process renders the preview: something is on screen
+    /// already).
+    pub fn render_stages_with(
+        &mut self,
+        divisors: &[u32],
+        first_cancellable: bool,
         mut cancel: impl FnMut() -> bool,
         mut write: impl FnMut(StageFrame),
     ) -> Result<bool, String> {
@@ -444,9 +458,9 @@ impl Session {
             let (sw, sh) = ((w / d).max(1), (h / d).max(1));
             // The first stage (the preview) always completes; later ones stop
             // between bands of rows as soon as a newer edit arrives.
-            let request = match i {
-                0 => RenderRequest::new(sw, sh),
-                _ => RenderRequest::cancellable(sw, sh, &mut cancel),
+            let request = match i == 0 && !first_cancellable {
+                true => RenderRequest::new(sw, sh),
+                false => RenderRequest::cancellable(sw, sh, &mut cancel),
             };
             match self.renderer.render(up, request).map(|r| r.frame) {
                 Err(RenderError::Cancelled) => return Ok(true),

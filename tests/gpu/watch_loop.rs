@@ -303,6 +303,55 @@ fn a_newer_edit_cancels_the_refinement() {
         .unwrap();
     assert!(!cancelled);
     assert_eq!(written, [(16, 12), (64, 48)]);
+
+    // With the preview process, the loop's full image is its only stage,
+    // and a newer edit stops it between bands too (200 rows: 4 bands).
+    let load = penumbra::loaders::LoadOptions {
+        width: Some(64),
+        height: Some(200),
+        ..Default::default()
+    };
+    let renderer = Renderer::new(&RendererOptions {
+        shaders: penumbra::render::ShaderSource::Directory(fx.shaders.clone()),
+        ..Default::default()
+    })
+    .unwrap();
+    let mut s = Session::new(renderer, &fx.scene, load);
+    assert!(s
+        .apply(Changes {
+            shaders: true,
+            scene: true
+        })
+        .errors
+        .is_empty());
+    let mut written = Vec::new();
+    let mut asked = 0;
+    let cancelled = s
+        .render_stages_with(
+            &[1],
+            true,
+            || {
+                asked += 1;
+                true
+            },
+            |f| written.push((f.image.width, f.image.height)),
+        )
+        .unwrap();
+    assert!(
+        cancelled && written.is_empty() && asked > 0,
+        "{asked} {written:?}"
+    );
+    // Not cancellable: the only stage completes whatever is pending.
+    let cancelled = s
+        .render_stages_with(
+            &[1],
+            false,
+            || true,
+            |f| written.push((f.image.width, f.image.height)),
+        )
+        .unwrap();
+    assert!(!cancelled);
+    assert_eq!(written, [(64, 200)]);
 }
 
 #[test]
