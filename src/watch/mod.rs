@@ -473,17 +473,19 @@ impl Watch {
                 .cloned()
                 .collect()
         };
-        // The preview process compiles and renders the preview; this one
-        // applies the same changes and renders the full image.
-        let started = self.request_preview(number, b.first_event, changes, &textures);
+        // The preview process compiles and renders the preview (and after a
+        // shader edit the full image too, on its kept hits); this one
+        // applies the same changes and renders the full image, unless the
+        // preview process wrote it first.
+        let shader_edit = !first && changes.shaders && !changes.scene && textures.is_empty();
+        let started = self.request_preview(number, b.first_event, changes, &textures, shader_edit);
         let previewing = started.is_some();
-        let shader_edit = changes.shaders && !changes.scene && textures.is_empty();
-        if started == Some(false) && !first && shader_edit && !self.head_start.is_zero() {
+        if started == Some(false) && shader_edit && !self.head_start.is_zero() {
             // A shader edit's preview is a compile: the preview process gets
             // the cores to itself, then this one compiles (two compiles at
             // once slowed both: docs/watch.md).
-            if let Some(w) = self.worker.as_mut() {
-                w.wait(self.head_start);
+            if let Some(w) = &self.worker {
+                w.head_start(self.head_start);
             }
         }
         let applied = self.session.apply_edits(changes, &textures);
@@ -508,8 +510,9 @@ impl Watch {
         } else {
             (Vec::new(), false)
         };
-        if let Some(preview) = self.worker.as_mut().and_then(preview::Worker::close) {
-            stages.insert(0, preview);
+        if let Some(w) = self.worker.as_mut() {
+            stages.extend(w.close());
+            stages.sort_by_key(|s| s.written_at);
         }
         let mut reload = Reload {
             number,
@@ -567,6 +570,7 @@ impl Watch {
         first_event: Instant,
         changes: Changes,
         textures: &[PathBuf],
+        full: bool,
     ) -> Option<bool> {
         let cmd = self.worker_command.as_ref()?;
         if self.worker.as_ref().is_some_and(preview::Worker::is_dead) {
@@ -576,6 +580,7 @@ impl Watch {
             number,
             changes,
             textures: textures.to_vec(),
+            full,
         };
         let started = self.worker.is_none();
         if started {
@@ -596,6 +601,8 @@ impl Watch {
                 scene: true,
             };
             request.textures.clear();
+            // Nor does it hold full-size hit records to shade.
+            request.full = false;
         }
         let w = self.worker.as_mut()?;
         w.request(&request, first_event);
@@ -648,18 +655,30 @@ impl Watch {
         let lit_by_default = self.session.lit_by_default();
         let (watcher, out, worker) = (&mut self.watcher, &self.out, &mut self.worker);
         let preview_wait = self.preview_wait;
-        // With the preview process, this process renders the full image only.
+        // With the preview process, this process renders the full image
+        // only, and stops when the preview process wrote it first.
         let divisors: &[u32] = if previewing { &[1] } else { &self.divisors };
+        let worker_full = worker
+            .as_ref()
+            .filter(|_| previewing)
+            .map(preview::Worker::full_done);
+        let done = || worker_full.as_ref().is_some_and(preview::FullDone::get);
+        if done() {
+            return (stages, false);
+        }
         // The full image stops between bands for a newer edit even when it
         // is this process's only stage: the preview process showed one.
         let rendered = self.session.render_stages_with(
             divisors,
             previewing,
-            || watcher.pending(),
+            || watcher.pending() || done(),
             |frame: StageFrame| {
                 if let Some(w) = worker.as_mut().filter(|_| previewing) {
-                    // The preview of this reload first, never after.
-                    w.wait(preview_wait);
+                    // The preview of this reload first, never after; and
+                    // the full image once.
+                    if !w.claim_full(preview_wait) {
+                        return;
+                    }
                 }
                 let written = out.lock().unwrap_or_else(|e| e.into_inner()).write_stage(
                     frame,
@@ -675,7 +694,9 @@ impl Watch {
         );
         let mut cancelled = false;
         match rendered {
-            Ok(c) => cancelled = c,
+            // Stopped because the preview process's full image is on disk:
+            // nothing was cancelled.
+            Ok(c) => cancelled = c && !done(),
             Err(e) => {
                 if !errors.contains(&e) {
                     errors.push(e)
@@ -744,18 +765,15 @@ impl Reload {
             parts.push(format!("texture replace {}", ms(t)));
         }
         for s in &self.stages {
-            let name = match (s.preview, s.worker) {
-                (true, true) => "preview (preview process)",
-                (true, false) => "preview",
-                (false, _) => "full",
-            };
+            let name = if s.preview { "preview" } else { "full" };
+            let by = if s.worker { " (preview process)" } else { "" };
             // The preview process's compile is not in the line's compile.
             let compile = match s.worker && s.compile.total() > Duration::ZERO {
                 true => format!("compile {}, ", ms(s.compile.total())),
                 false => String::new(),
             };
             parts.push(format!(
-                "{name} {}x{}: {compile}render {}{}, encode+write {}, latency {}",
+                "{name} {}x{}{by}: {compile}render {}{}, encode+write {}, latency {}",
                 s.width,
                 s.height,
                 ms(s.render),

@@ -107,6 +107,8 @@ pub struct Request {
     pub changes: Changes,
     /// The changed texture files, normalised.
     pub textures: Vec<PathBuf>,
+    /// Render the full image too, after the preview (a second answer).
+    pub full: bool,
 }
 
 /// The worker's answer to a [`Request`].
@@ -178,7 +180,8 @@ impl Request {
     pub fn write(&self, w: &mut impl Write) -> std::io::Result<()> {
         use std::os::unix::ffi::OsStrExt as _;
         put_u64(w, self.number)?;
-        let flags = self.changes.shaders as u8 | (self.changes.scene as u8) << 1;
+        let flags =
+            self.changes.shaders as u8 | (self.changes.scene as u8) << 1 | (self.full as u8) << 2;
         w.write_all(&[flags])?;
         put_u32(w, self.textures.len() as u32)?;
         for t in &self.textures {
@@ -219,6 +222,7 @@ impl Request {
                 scene: flags & 2 != 0,
             },
             textures,
+            full: flags & 4 != 0,
         }))
     }
 }
@@ -304,8 +308,13 @@ pub fn serve(opts: &WatchOptions) -> anyhow::Result<()> {
     let mut input = BufReader::new(std::io::stdin().lock());
     let mut output = BufWriter::new(std::io::stdout().lock());
     while let Some(req) = Request::read(&mut input)? {
-        let answer = preview_of(&mut session, &req, divisor);
+        let mut answer = preview_of(&mut session, &req, divisor);
         answer.write(req.number, &mut output)?;
+        if req.full && matches!(answer, Answer::Image(_)) {
+            // The full image, which a newer request stops between bands.
+            answer = full_of(&mut session, || input_pending(&input));
+            answer.write(req.number, &mut output)?;
+        }
         if matches!(answer, Answer::Hung) {
             // The dispatch that never ends keeps a driver thread: only the
             // end of the process frees it, and the loop kills this one.
@@ -313,6 +322,45 @@ pub fn serve(opts: &WatchOptions) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Whether the loop has sent another request (buffered, or waiting on the
+/// pipe).
+fn input_pending<R: std::io::Read + std::os::fd::AsRawFd>(input: &BufReader<R>) -> bool {
+    if !input.buffer().is_empty() {
+        return true;
+    }
+    let mut fd = libc::pollfd {
+        fd: input.get_ref().as_raw_fd(),
+        events: libc::POLLIN,
+        revents: 0,
+    };
+    // SAFETY: poll(2) on one valid pollfd, without waiting.
+    unsafe { libc::poll(&mut fd, 1, 0) > 0 }
+}
+
+/// Renders the full image on the kept hit records (after a preview of the
+/// same files); `Nothing` when `cancel` stopped it or it failed.
+fn full_of(session: &mut Session, cancel: impl FnMut() -> bool) -> Answer {
+    let Some(full) = session.size() else {
+        return Answer::Nothing;
+    };
+    let mut frame = None;
+    let rendered = session.render_stages_with(&[1], true, cancel, |f: StageFrame| frame = Some(f));
+    if session.is_hung() {
+        return Answer::Hung;
+    }
+    match (rendered, frame) {
+        (Ok(false), Some(f)) => Answer::Image(Preview {
+            image: f.image,
+            full,
+            lit_by_default: session.lit_by_default(),
+            compile: [f.compile.naga, f.compile.pipeline, f.compile.driver],
+            render: f.render,
+            hits_reused: f.hits_reused,
+        }),
+        _ => Answer::Nothing,
+    }
 }
 
 /// Applies one request's changes and renders the preview.
@@ -362,17 +410,41 @@ struct Shared {
 
 #[derive(Default)]
 struct State {
-    /// The reload whose preview is awaited.
+    /// The reload whose answers are awaited.
     open: Option<Open>,
     /// The worker ended or broke the protocol.
     dead: bool,
 }
 
+/// Who wrote a reload's full image: the first to claim it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum By {
+    Loop,
+    Worker,
+}
+
 struct Open {
     number: u64,
     first_event: Instant,
-    answered: bool,
-    stage: Option<StageReport>,
+    preview_answered: bool,
+    /// A second answer, the full image, will come.
+    full_expected: bool,
+    full_by: Option<By>,
+    stages: Vec<StageReport>,
+}
+
+/// Whether the preview process wrote the open reload's full image (the
+/// loop's render then stops: it has nothing to add).
+pub struct FullDone(Arc<Shared>);
+
+impl FullDone {
+    /// Whether it did.
+    pub fn get(&self) -> bool {
+        let st = self.0.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.open
+            .as_ref()
+            .is_some_and(|o| o.full_by == Some(By::Worker))
+    }
 }
 
 /// The loop's side of a worker: the child process, the pipe to it, and the
@@ -431,46 +503,44 @@ impl Worker {
         })
     }
 
-    /// Whether the worker ended or broke the protocol.
-    pub(super) fn is_dead(&self) -> bool {
-        self.shared
-            .state
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .dead
+    fn state(&self) -> std::sync::MutexGuard<'_, State> {
+        self.shared.state.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Asks for the preview of reload `number`.
+    /// Whether the worker ended or broke the protocol.
+    pub(super) fn is_dead(&self) -> bool {
+        self.state().dead
+    }
+
+    /// Asks for the preview of reload `number` (and its full image, if
+    /// `req.full`).
     pub(super) fn request(&mut self, req: &Request, first_event: Instant) {
-        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
-        st.open = Some(Open {
+        self.state().open = Some(Open {
             number: req.number,
             first_event,
-            answered: false,
-            stage: None,
+            preview_answered: false,
+            full_expected: req.full,
+            full_by: None,
+            stages: Vec::new(),
         });
-        drop(st);
         if req.write(&mut self.input).is_err() {
             self.mark_dead();
         }
     }
 
-    /// Waits until the worker answered the open request (the preview is
-    /// then on disk, if it rendered one), died, or `limit` passed (then it
-    /// is counted as hung and killed).
-    pub(super) fn wait(&mut self, limit: Duration) {
+    /// Waits until the worker answered the open request's preview (it is
+    /// then on disk, if it rendered one), died, or `limit` passed; returns
+    /// whether it answered.
+    fn wait_preview(&self, limit: Duration) -> bool {
         let deadline = Instant::now() + limit;
-        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        let mut st = self.state();
         loop {
-            let waiting = !st.dead && st.open.as_ref().is_some_and(|o| !o.answered);
-            if !waiting {
-                return;
+            if st.dead || st.open.as_ref().is_none_or(|o| o.preview_answered) {
+                return !st.dead;
             }
             let now = Instant::now();
             if now >= deadline {
-                drop(st);
-                self.mark_dead();
-                return;
+                return false;
             }
             st = self
                 .shared
@@ -481,17 +551,49 @@ impl Worker {
         }
     }
 
-    /// Closes the open request: returns its preview stage if it was
-    /// written; an answer that comes later is dropped.
-    pub(super) fn close(&mut self) -> Option<StageReport> {
-        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
-        st.open.take().and_then(|o| o.stage)
+    /// The head start after a shader edit: waits for the preview for at most
+    /// `limit` (a worker that takes longer goes on, in parallel).
+    pub(super) fn head_start(&self, limit: Duration) {
+        self.wait_preview(limit);
+    }
+
+    /// Before the loop writes its full image: waits for the preview (a
+    /// worker that has not answered within `limit` counts as hung and is
+    /// killed), then claims the full image. False: the worker wrote it.
+    pub(super) fn claim_full(&mut self, limit: Duration) -> bool {
+        if !self.wait_preview(limit) && !self.is_dead() {
+            self.mark_dead();
+        }
+        let mut st = self.state();
+        match st.open.as_mut() {
+            Some(o) if o.full_by == Some(By::Worker) => false,
+            Some(o) => {
+                o.full_by = Some(By::Loop);
+                true
+            }
+            None => true,
+        }
+    }
+
+    /// Whether the worker wrote the open reload's full image, for the
+    /// loop's render to ask between bands.
+    pub(super) fn full_done(&self) -> FullDone {
+        FullDone(self.shared.clone())
+    }
+
+    /// Closes the open request: returns the stages the worker wrote for it
+    /// (preview, then full image); an answer that comes later is dropped.
+    pub(super) fn close(&mut self) -> Vec<StageReport> {
+        self.state()
+            .open
+            .take()
+            .map(|o| o.stages)
+            .unwrap_or_default()
     }
 
     fn mark_dead(&mut self) {
         let _ = self.child.kill();
-        let mut st = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
-        st.dead = true;
+        self.state().dead = true;
         self.shared.answered.notify_all();
     }
 }
@@ -506,7 +608,8 @@ impl Drop for Worker {
     }
 }
 
-/// The reader thread: writes each preview of the open reload as it comes.
+/// The reader thread: writes each image of the open reload as it comes:
+/// the preview, then the full image unless the loop claimed it first.
 fn read_answers(output: ChildStdout, shared: &Shared, out: &Mutex<Output>) {
     let mut output = BufReader::new(output);
     loop {
@@ -520,32 +623,30 @@ fn read_answers(output: ChildStdout, shared: &Shared, out: &Mutex<Output>) {
                 return;
             }
         };
-        let Some(first_event) = st
-            .open
-            .as_ref()
-            .filter(|o| o.number == number && !o.answered)
-            .map(|o| o.first_event)
-        else {
-            continue;
-        };
-        let stage = match answer {
-            Answer::Image(p) => write_preview(p, first_event, out),
-            Answer::Nothing => None,
-            Answer::Hung => {
-                st.dead = true;
-                None
+        let hung = matches!(answer, Answer::Hung);
+        if let Some(o) = st.open.as_mut().filter(|o| o.number == number) {
+            if !o.preview_answered {
+                o.preview_answered = true;
+                // Only a rendered preview is followed by the full image.
+                o.full_expected &= matches!(answer, Answer::Image(_));
+                if let Answer::Image(p) = answer {
+                    o.stages.extend(write_preview(p, o.first_event, out));
+                }
+            } else if o.full_expected {
+                o.full_expected = false;
+                if let (Answer::Image(p), None) = (answer, o.full_by) {
+                    o.full_by = Some(By::Worker);
+                    o.stages.extend(write_preview(p, o.first_event, out));
+                }
             }
-        };
-        if let Some(o) = st.open.as_mut() {
-            o.stage = stage;
-            o.answered = true;
         }
+        st.dead |= hung;
         shared.answered.notify_all();
     }
 }
 
-/// Writes a worker's preview to the output; its stage report, or None if
-/// it could not be written (the full image will be).
+/// Writes a worker's image (a preview, or the full image) to the output;
+/// its stage report, or None if it could not be written.
 fn write_preview(p: Preview, first_event: Instant, out: &Mutex<Output>) -> Option<StageReport> {
     let frame = StageFrame {
         image: p.image,
@@ -582,6 +683,7 @@ mod tests {
                 scene: false,
             },
             textures: vec![PathBuf::from("/a/b c.png"), PathBuf::from("/é\n.png")],
+            full: true,
         };
         let mut buf = Vec::new();
         req.write(&mut buf).unwrap();

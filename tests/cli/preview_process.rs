@@ -19,57 +19,110 @@ const EVERYTHING: Changes = Changes {
     scene: true,
 };
 
-/// The preview the loop's own process renders of the fixture's files.
-fn preview_here(fx: &Fixture) -> penumbra::frame::Image {
-    let o = fx.options();
+/// The stages the loop's own process renders of the fixture's files at
+/// `size` (None: the scene's 64×48), with `divisors`.
+fn stages_here(
+    fx: &Fixture,
+    size: Option<(u32, u32)>,
+    divisors: &[u32],
+) -> Vec<penumbra::frame::Image> {
+    let mut o = fx.options();
+    o.load.width = size.map(|s| s.0);
+    o.load.height = size.map(|s| s.1);
     let mut s = Session::new(Renderer::new(&o.renderer).unwrap(), &fx.scene, o.load);
     assert!(s.apply(EVERYTHING).errors.is_empty());
-    let mut image = None;
-    s.render_stages(&[4], || false, |f| image = Some(f.image))
+    let mut images = Vec::new();
+    s.render_stages(divisors, || false, |f| images.push(f.image))
         .unwrap();
-    image.unwrap()
+    images
 }
 
-#[test]
-fn the_worker_renders_the_loops_preview_and_survives_a_broken_shader() {
-    let fx = Fixture::new();
-    let want = preview_here(&fx);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .arg("watch")
-        .arg(&fx.scene)
-        .arg("-o")
-        .arg(&fx.out)
-        .arg("--shaders")
-        .arg(&fx.shaders)
-        .env(preview::ENV_WORKER, "1")
-        .envs(preview::QUICK_COMPILE)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut input = BufWriter::new(child.stdin.take().unwrap());
-    let mut output = BufReader::new(child.stdout.take().unwrap());
-    let mut ask = |number: u64, changes: Changes| {
+/// The largest difference between two images of one size, per channel.
+fn largest_difference(a: &penumbra::frame::Image, b: &penumbra::frame::Image) -> f32 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.pixels
+        .iter()
+        .flatten()
+        .zip(b.pixels.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max)
+}
+
+/// A worker (`penumbra watch` with ENV_WORKER) on the fixture, spoken to
+/// directly: write requests to `input`, read answers from `output`.
+struct Worker {
+    child: std::process::Child,
+    input: BufWriter<std::process::ChildStdin>,
+    output: BufReader<std::process::ChildStdout>,
+}
+
+impl Worker {
+    fn start(fx: &Fixture, extra: &[&str]) -> Worker {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .arg("watch")
+            .arg(&fx.scene)
+            .arg("-o")
+            .arg(&fx.out)
+            .arg("--shaders")
+            .arg(&fx.shaders)
+            .args(extra)
+            .env(preview::ENV_WORKER, "1")
+            .envs(preview::QUICK_COMPILE)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        Worker {
+            input: BufWriter::new(child.stdin.take().unwrap()),
+            output: BufReader::new(child.stdout.take().unwrap()),
+            child,
+        }
+    }
+
+    fn send(&mut self, number: u64, changes: Changes, full: bool) {
         let req = Request {
             number,
             changes,
             textures: Vec::new(),
+            full,
         };
-        req.write(&mut input).unwrap();
-        let (n, answer) = Answer::read(&mut output).unwrap();
+        req.write(&mut self.input).unwrap();
+    }
+
+    fn answer(&mut self, number: u64) -> Answer {
+        let (n, answer) = Answer::read(&mut self.output).unwrap();
         assert_eq!(n, number);
         answer
-    };
+    }
 
-    // Compiled without LLVM's optimisations at 128 bits, the image of the
-    // loop's own 16×12 preview: bit for bit on the Zen 4 of docs/watch.md.
-    // The bound allows only what another CPU may give at another SIMD width
-    // (lavapipe picks its rsqrt and rcp approximations per width and
-    // instruction set, each within 2^-12 before a Newton step); a wrong
-    // scene, size, shader or setting is off by far more.
-    let Answer::Image(p) = ask(0, EVERYTHING) else {
-        panic!("no preview");
-    };
+    fn image(&mut self, number: u64, what: &str) -> preview::Preview {
+        match self.answer(number) {
+            Answer::Image(p) => p,
+            other => panic!("no {what}: {other:?}"),
+        }
+    }
+}
+
+const SHADER_EDIT: Changes = Changes {
+    shaders: true,
+    scene: false,
+};
+
+#[test]
+fn the_worker_renders_the_loops_images_and_survives_a_broken_shader() {
+    let fx = Fixture::new();
+    let want = stages_here(&fx, None, &[4, 1]);
+    let mut w = Worker::start(&fx, &[]);
+
+    // Compiled without LLVM's optimisations at 128 bits, the images of the
+    // loop's own 16×12 preview and 64×48 full image: bit for bit on the
+    // Zen 4 of docs/watch.md. The bound allows only what another CPU may
+    // give at another SIMD width (lavapipe picks its rsqrt and rcp
+    // approximations per width and instruction set, each within 2^-12
+    // before a Newton step); a wrong scene, size, shader or setting is off
+    // by far more.
+    w.send(0, EVERYTHING, false);
+    let p = w.image(0, "preview");
     assert_eq!((p.image.width, p.image.height), (16, 12));
     assert_eq!(p.full, (64, 48));
     assert!(p.compile[2] > Duration::ZERO, "the driver compiled");
@@ -77,40 +130,65 @@ fn the_worker_renders_the_loops_preview_and_survives_a_broken_shader() {
         p.image.pixels.iter().any(|px| px[0] > 0.1),
         "the sphere is lit"
     );
-    assert_eq!((want.width, want.height), (16, 12));
-    let off = p
-        .image
-        .pixels
-        .iter()
-        .flatten()
-        .zip(want.pixels.iter().flatten())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0f32, f32::max);
+    let off = largest_difference(&p.image, &want[0]);
     assert!(off <= 1e-4, "the loop's preview differs by {off}");
+    // The full image too, when asked: a second answer.
+    w.send(1, SHADER_EDIT, true);
+    let _ = w.image(1, "preview");
+    let f = w.image(1, "full image");
+    assert_eq!((f.image.width, f.image.height), (64, 48));
+    let off = largest_difference(&f.image, &want[1]);
+    assert!(off <= 1e-4, "the loop's full image differs by {off}");
 
-    // A broken shader: nothing to show; then a good one renders on the
-    // kept hit records.
-    let edit = Changes {
-        shaders: true,
-        scene: false,
-    };
+    // A broken shader: nothing to show, and no second answer; then a good
+    // one renders both on the kept hit records.
     std::fs::write(fx.shader_path(), fx.shader_scaled("vec3<f32>(0.0) *")).unwrap();
-    assert_eq!(ask(1, edit), Answer::Nothing);
+    w.send(2, SHADER_EDIT, true);
+    assert_eq!(w.answer(2), Answer::Nothing);
     std::fs::write(
         fx.shader_path(),
         fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
     )
     .unwrap();
-    let Answer::Image(p) = ask(2, edit) else {
-        panic!("no preview after the fix");
-    };
-    assert!(p.hits_reused);
-    assert!(p.image.pixels.iter().all(|px| px[0] == 0.0), "red is gone");
-    assert!(p.image.pixels.iter().any(|px| px[1] > 0.1));
+    w.send(3, SHADER_EDIT, true);
+    for (what, size) in [("preview", (16, 12)), ("full image", (64, 48))] {
+        let p = w.image(3, what);
+        assert_eq!((p.image.width, p.image.height), size);
+        assert!(p.hits_reused, "{what}");
+        assert!(p.image.pixels.iter().all(|px| px[0] == 0.0), "red is gone");
+        assert!(p.image.pixels.iter().any(|px| px[1] > 0.1));
+    }
 
     // The loop's end (its pipe closed) ends the worker.
-    drop(input);
-    assert!(child.wait().unwrap().success());
+    drop(w.input);
+    assert!(w.child.wait().unwrap().success());
+}
+
+#[test]
+fn a_newer_request_stops_the_workers_full_image() {
+    let fx = Fixture::new();
+    // 200 rows: the full image renders in 4 bands of 64 rows.
+    let mut w = Worker::start(&fx, &["--width", "64", "--height", "200"]);
+    w.send(0, EVERYTHING, false);
+    let _ = w.image(0, "preview");
+    // Two edits at once: the second is waiting when the first's full image
+    // starts, so it stops after its first band and says so.
+    std::fs::write(
+        fx.shader_path(),
+        fx.shader_scaled("vec3<f32>(0.0, 1.0, 1.0)"),
+    )
+    .unwrap();
+    w.send(1, SHADER_EDIT, true);
+    w.send(2, SHADER_EDIT, true);
+    let p = w.image(1, "preview");
+    assert_eq!((p.image.width, p.image.height), (16, 50));
+    assert_eq!(w.answer(1), Answer::Nothing, "the full image went on");
+    let _ = w.image(2, "preview");
+    let f = w.image(2, "full image");
+    assert_eq!((f.image.width, f.image.height), (64, 200));
+    let want = stages_here(&fx, Some((64, 200)), &[1]);
+    let off = largest_difference(&f.image, &want[0]);
+    assert!(off <= 1e-4, "the loop's full image differs by {off}");
 }
 
 /// The pids of `pid`'s children.
@@ -143,7 +221,7 @@ fn the_loop_outlives_its_preview_process_and_leaves_none_behind() {
     let line = p.wait_line("the first render", false, |l| {
         l.starts_with("reload 0: start")
     });
-    assert!(line.contains("preview (preview process) 16x12"), "{line}");
+    assert!(line.contains("preview 16x12 (preview process)"), "{line}");
     let workers = children(p.child.id());
     assert_eq!(workers.len(), 1, "one preview process: {workers:?}");
     // SAFETY: kill(2) on a process this test's child started.
@@ -167,7 +245,7 @@ fn the_loop_outlives_its_preview_process_and_leaves_none_behind() {
     )
     .unwrap();
     let line = p.wait_line("reload 2", false, |l| l.starts_with("reload 2:"));
-    assert!(line.contains("preview (preview process) 16x12"), "{line}");
+    assert!(line.contains("preview 16x12 (preview process)"), "{line}");
     let again: Vec<u32> = children(p.child.id())
         .into_iter()
         .filter(|&c| running(c))

@@ -27,7 +27,7 @@ fn the_binary_reloads_reports_errors_and_recovers() {
         "driver ",
         // On lavapipe the preview process renders the preview
         // (cli::preview_process tests it).
-        "preview (preview process) 16x12: compile ",
+        "preview 16x12 (preview process): compile ",
         "full 64x48",
         "latency ",
     ] {
