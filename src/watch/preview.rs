@@ -21,10 +21,17 @@
 //! a preview of a reload the loop has finished is dropped.
 //!
 //! After a shader edit the loop gives the worker a head start
-//! ([`HEAD_START`] at most): it compiles only once the preview is on disk.
-//! Two compiles at once slowed each other on a 2-core machine, the full
-//! image's included (docs/watch.md). A scene or texture edit and the first
-//! render, whose time goes to loading, run in both processes at once.
+//! ([`HEAD_START`] at most): it compiles only once the preview is on disk
+//! (two compiles at once slowed each other on a 2-core machine:
+//! docs/watch.md). The worker then renders the full image too, on the
+//! full-size hit records it keeps ([`Request::full`]): its code runs
+//! slower but is compiled already, so its full image usually lands long
+//! before the loop's compile ends. The first full image on disk wins: the
+//! loop's render stops between bands once the worker's is written, and a
+//! worker's full image that comes after the loop's is dropped; a newer
+//! request stops the worker's between bands. A scene or texture edit and
+//! the first render, whose time goes to loading, run in both processes at
+//! once, and the loop renders their full image.
 //!
 //! The worker's failures do not reach the user: the loop reports its own
 //! errors for the same files. A worker that dies or stops answering is

@@ -550,9 +550,11 @@ fn main() -> anyhow::Result<()> {
          pipeline and the render after it reruns only the shade pipelines on the hit records it \
          kept.\n\n\
          On a CPU device `watch` renders the preview in a second process whose driver compiles \
-         quickly (`GALLIVM_PERF=nopt`, `LP_NATIVE_VECTOR_WIDTH=128`: `src/watch/preview.rs`); the \
-         loop's process compiles its own pipeline once the preview is on disk (after a shader edit) \
-         and renders the full image. The compile rows of the preview process's tables are its own.\n\n\
+         quickly (`GALLIVM_PERF=nopt`, `LP_NATIVE_VECTOR_WIDTH=128`: `src/watch/preview.rs`). After \
+         a shader edit it renders the full image too, on its kept hits, while the loop's process \
+         compiles its own pipeline once the preview is on disk (the head start) and renders the full \
+         image as well: the first full image on disk wins, the other stops. The compile rows of the \
+         preview process's tables are its own, and its full image is in the full rows when it won.\n\n\
          ## Phong edit → preview on disk (10 edits of `shaders/shading/phong.wgsl`)\n\n\
          Save → preview: **{}**; save → full image: {:.0} ms (median).\n\n{}\n\n{}\n\
          ### The same edits with the preview in the loop's process (`--preview-process off`)\n\n\
