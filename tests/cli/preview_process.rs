@@ -58,14 +58,8 @@ struct Worker {
 
 impl Worker {
     fn start(fx: &Fixture, extra: &[&str]) -> Worker {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-            .arg("watch")
-            .arg(&fx.scene)
-            .arg("-o")
-            .arg(&fx.out)
-            .arg("--shaders")
-            .arg(&fx.shaders)
-            .args(extra)
+        let mut child = fx
+            .watch_command(extra)
             .env(preview::ENV_WORKER, "1")
             .envs(preview::QUICK_COMPILE)
             .stdin(Stdio::piped())

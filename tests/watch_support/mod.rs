@@ -95,6 +95,23 @@ impl Fixture {
         scale_shade(&self.shader_original, factor)
     }
 
+    /// `penumbra watch SCENE -o OUT --shaders DIR` plus `extra` (and
+    /// `--validate` under PENUMBRA_VALIDATION=1), not started.
+    pub fn watch_command(&self, extra: &[&str]) -> std::process::Command {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.arg("watch")
+            .arg(&self.scene)
+            .arg("-o")
+            .arg(&self.out)
+            .arg("--shaders")
+            .arg(&self.shaders)
+            .args(extra);
+        if std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1") {
+            cmd.arg("--validate");
+        }
+        cmd
+    }
+
     pub fn output(&self) -> Vec<u8> {
         std::fs::read(&self.out).unwrap()
     }
@@ -253,20 +270,9 @@ impl Child {
     /// Starts `penumbra watch SCENE -o OUT --shaders DIR` plus `extra`.
     pub fn start(fx: &Fixture, extra: &[&str]) -> Child {
         use std::io::BufRead;
-        use std::process::{Command, Stdio};
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
-        cmd.arg("watch")
-            .arg(&fx.scene)
-            .arg("-o")
-            .arg(&fx.out)
-            .arg("--shaders")
-            .arg(&fx.shaders)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped());
-        if std::env::var("PENUMBRA_VALIDATION").as_deref() == Ok("1") {
-            cmd.arg("--validate");
-        }
+        use std::process::Stdio;
+        let mut cmd = fx.watch_command(extra);
+        cmd.stdout(Stdio::piped()).stderr(Stdio::piped());
         let mut child = cmd.spawn().expect("start penumbra watch");
         let (tx, lines) = std::sync::mpsc::channel();
         let out = child.stdout.take().unwrap();
