@@ -5,7 +5,7 @@
 //! the preview in the loop's own process.
 
 use std::io::{BufReader, BufWriter};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use penumbra::render::Renderer;
