@@ -52,6 +52,7 @@ use super::stage::{Changes, CompileTimes, Session, StageFrame};
 use super::{files, Output, StageReport, WatchOptions};
 use crate::frame::Image;
 use crate::render::{Renderer, ShaderSource};
+use crate::scene::MAX_IMAGE_SIDE;
 
 /// Set (to `1`) in the worker's environment: `penumbra watch` then serves
 /// [`Request`]s on its standard input instead of running the loop.
@@ -69,10 +70,6 @@ pub const HEAD_START: Duration = Duration::from_secs(1);
 /// The environment that makes lavapipe compile quickly (module docs).
 pub const QUICK_COMPILE: [(&str, &str); 2] =
     [("GALLIVM_PERF", "nopt"), ("LP_NATIVE_VECTOR_WIDTH", "128")];
-
-/// The largest preview a worker may send, in pixels (a 16384² image at a
-/// divisor of 2); anything larger is a broken worker.
-const MAX_PIXELS: u64 = 8192 * 8192;
 
 /// How to start a worker: a `penumbra watch` command line of the same scene,
 /// shaders and options as the loop's.
@@ -265,14 +262,11 @@ impl Answer {
             2 => {
                 let [lit_by_default, hits_reused] = get::<2>(r)?;
                 let [width, height, fw, fh] = [get_u32(r)?, get_u32(r)?, get_u32(r)?, get_u32(r)?];
+                // No larger than the full image, which no scene can make
+                // larger than MAX_IMAGE_SIDE a side: anything else is a
+                // broken worker, refused before the allocation.
                 let pixels = width as u64 * height as u64;
-                if pixels == 0
-                    || pixels > MAX_PIXELS
-                    || fw < width
-                    || fh < height
-                    || fw > 16384
-                    || fh > 16384
-                {
+                if pixels == 0 || fw < width || fh < height || fw.max(fh) > MAX_IMAGE_SIDE {
                     return Err(invalid("an image of an impossible size"));
                 }
                 let mut t = [Duration::ZERO; 4];
@@ -349,25 +343,7 @@ fn input_pending<R: std::io::Read + std::os::fd::AsRawFd>(input: &BufReader<R>) 
 /// Renders the full image on the kept hit records (after a preview of the
 /// same files); `Nothing` when `cancel` stopped it or it failed.
 fn full_of(session: &mut Session, cancel: impl FnMut() -> bool) -> Answer {
-    let Some(full) = session.size() else {
-        return Answer::Nothing;
-    };
-    let mut frame = None;
-    let rendered = session.render_stages_with(&[1], true, cancel, |f: StageFrame| frame = Some(f));
-    if session.is_hung() {
-        return Answer::Hung;
-    }
-    match (rendered, frame) {
-        (Ok(false), Some(f)) => Answer::Image(Preview {
-            image: f.image,
-            full,
-            lit_by_default: session.lit_by_default(),
-            compile: [f.compile.naga, f.compile.pipeline, f.compile.driver],
-            render: f.render,
-            hits_reused: f.hits_reused,
-        }),
-        _ => Answer::Nothing,
-    }
+    rendered(session, 1, true, cancel, CompileTimes::default())
 }
 
 /// Applies one request's changes and renders the preview.
@@ -379,32 +355,45 @@ fn preview_of(session: &mut Session, req: &Request, divisor: u32) -> Answer {
     if !applied.render {
         return Answer::Nothing;
     }
+    // The compile of the edit (apply_edits') and of the first dispatch
+    // (the render's) together.
+    let compiled = applied.compile.unwrap_or_default();
+    rendered(session, divisor, false, || false, compiled)
+}
+
+/// Renders one stage at 1/`divisor` of the full size (stopped between
+/// bands by `cancel` if `cancellable`) as an answer; `compiled` is compile
+/// time spent before it.
+fn rendered(
+    session: &mut Session,
+    divisor: u32,
+    cancellable: bool,
+    cancel: impl FnMut() -> bool,
+    compiled: CompileTimes,
+) -> Answer {
     let Some(full) = session.size() else {
         return Answer::Nothing;
     };
-    let mut preview = None;
-    let rendered = session.render_stages(&[divisor], || false, |f: StageFrame| preview = Some(f));
+    let mut frame = None;
+    let result = session.render_stages_with(&[divisor], cancellable, cancel, |f: StageFrame| {
+        frame = Some(f)
+    });
     if session.is_hung() {
         return Answer::Hung;
     }
-    match (rendered, preview) {
-        (Ok(_), Some(f)) => {
-            // The compile of the edit (apply_edits') and of the first
-            // dispatch (the render's) together.
-            let c = applied.compile.unwrap_or_default();
-            Answer::Image(Preview {
-                image: f.image,
-                full,
-                lit_by_default: session.lit_by_default(),
-                compile: [
-                    c.naga + f.compile.naga,
-                    c.pipeline + f.compile.pipeline,
-                    c.driver + f.compile.driver,
-                ],
-                render: f.render,
-                hits_reused: f.hits_reused,
-            })
-        }
+    match (result, frame) {
+        (Ok(false), Some(f)) => Answer::Image(Preview {
+            image: f.image,
+            full,
+            lit_by_default: session.lit_by_default(),
+            compile: [
+                compiled.naga + f.compile.naga,
+                compiled.pipeline + f.compile.pipeline,
+                compiled.driver + f.compile.driver,
+            ],
+            render: f.render,
+            hits_reused: f.hits_reused,
+        }),
         _ => Answer::Nothing,
     }
 }
@@ -714,7 +703,11 @@ mod tests {
             render: Duration::from_micros(900),
             hits_reused: true,
         };
-        for a in [Answer::Image(p), Answer::Nothing, Answer::Hung] {
+        let whole = Answer::Image(Preview {
+            full: (2, 1),
+            ..p.clone()
+        });
+        for a in [Answer::Image(p), whole, Answer::Nothing, Answer::Hung] {
             let mut buf = Vec::new();
             a.write(9, &mut buf).unwrap();
             assert_eq!(Answer::read(&mut buf.as_slice()).unwrap(), (9, a));
